@@ -1,0 +1,411 @@
+"""
+The GONG instrument model: every parameter of the simulation in one place.
+
+`GONGInstrument` is a frozen dataclass.  Each physical parameter is an
+`astropy.units.Quantity` whose default is the value given in Plowman & Berger,
+"Calibrating GONG Magnetograms with End-to-end Instrument Simulation I"
+(the *paper*), or, where the paper is ambiguous or wrong, the value decided in
+the project's design notes (the *design*, section "Physics decisions").  No
+other module of gongsynth holds an instrument parameter of its own.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+from dataclasses import dataclass, field, fields
+from pathlib import Path
+
+import astropy.constants as const
+import astropy.units as u
+
+__all__ = ["GONGInstrument", "PREFILTER_FORMS"]
+
+#: Accepted values of `GONGInstrument.prefilter_form`.
+PREFILTER_FORMS = ("memo", "ideal")
+
+# Field metadata keys.
+_UNIT = "unit"
+_DOC = "doc"
+
+
+def _param(default, unit, doc):
+    """A Quantity-valued dataclass field with its canonical unit and source."""
+    return field(default=u.Quantity(default, unit), metadata={_UNIT: u.Unit(unit), _DOC: doc})
+
+
+def _plain(default, kind, doc):
+    """A plain (int or str) dataclass field."""
+    return field(default=default, metadata={_UNIT: kind, _DOC: doc})
+
+
+@dataclass(frozen=True)
+class GONGInstrument:
+    """
+    Every parameter of the simulated GONG magnetograph.
+
+    All physical parameters are `~astropy.units.Quantity` objects; any unit
+    convertible to the canonical one is accepted and stored as given.  The
+    instance is immutable: use `replace` to derive a modified instrument.
+
+    Parameters
+    ----------
+    line_wavelength : `~astropy.units.Quantity`, length
+        Rest wavelength of Ni I 676.78 nm (paper, Sec. 2).
+    lande_g : `~astropy.units.Quantity`, dimensionless
+        Effective Landé factor used in the inversion, 1.5 (paper, Eq. 9;
+        the literature value is 1.426, Bruls 1993).
+    prefilter_center : `~astropy.units.Quantity`, length
+        Centre of the interference prefilter, 676.78 nm (paper, Sec. 2).
+    prefilter_fwhm : `~astropy.units.Quantity`, length
+        Width parameter w_p of the prefilter, 0.5 nm (paper, Eqs. 1-2).
+    prefilter_form : str
+        ``"memo"`` (default): the GONG-memo form
+        [1 + 1.6569((λ-λ0)/w_p)²]⁻² (paper, Eq. 2);
+        ``"ideal"``: [1 + ((λ-λ0)/(w_p/2))⁴]⁻¹, the intended FWHM = w_p form of
+        the paper's Eq. 1 (design §3.7; as printed, (2w_p)⁴ has a 2 nm FWHM).
+    lyot_delta_h : `~astropy.units.Quantity`, length
+        Lyot thickness parameter Δh = 608 µm (paper, Eq. 3).
+    lyot_angle_1, lyot_angle_2, lyot_angle_3 : `~astropy.units.Quantity`, angle
+        Element angles θ_k in cos²(2^(k-1) πΔh/λ - θ_k): 67.7°, -45.3°, 93°.
+        The paper prints θ_2 = +45.3°, which puts a transmission null on the
+        line; -45.3° is the working tuning (design §3.3).
+    michelson_fsr : `~astropy.units.Quantity`, length
+        Free spectral range Δλ_m of the Michelson, 0.305 Å (paper, Eq. 4).
+    michelson_angle : `~astropy.units.Quantity`, angle
+        Michelson phase offset θ_m = 8.2° (paper, Eq. 4).
+    waveplate_rate : `~astropy.units.Quantity`, frequency
+        Rotation rate of the half-wave plate, 5 Hz (paper, Sec. 2).
+    frame_rate : `~astropy.units.Quantity`, frequency
+        Camera frame rate, 60 frames per second (paper, Sec. 2).
+    exposure_time : `~astropy.units.Quantity`, time
+        Exposure of one frame, 1/60 s (paper, Sec. 3.2).
+    lcvr_period : `~astropy.units.Quantity`, time
+        Time between LCVR switches I+V ↔ I-V, 1 s (paper, Sec. 2).
+    aperture : `~astropy.units.Quantity`, length
+        Effective aperture diameter D = 2.8 cm (paper, Sec. 2).
+    plate_scale : `~astropy.units.Quantity`, angle
+        Detector pixel size on the sky, 2.5 arcsec (paper, Sec. 2).
+    detector_shape : int
+        Detector side in pixels, 860 (GONG full-disk images are 860 × 860).
+    supersampling : int
+        Resampling factor before binning to GONG pixels, 5 (paper, Sec. 3.2).
+    seeing_fwhm : `~astropy.units.Quantity`, angle
+        FWHM of the Gaussian seeing kernel, 3.6 arcsec (paper, Sec. 3.2).
+    effective_area : `~astropy.units.Quantity`, area
+        Effective collecting area, 0.6 cm² (paper, Sec. 3.2).
+    quantum_efficiency : `~astropy.units.Quantity`, dimensionless
+        CCD quantum efficiency, 0.16 (paper, Sec. 3.2).
+    gain : `~astropy.units.Quantity`, electron / adu
+        ADU conversion factor, 33 e⁻/ADU (paper, Sec. 3.2).
+    read_noise : `~astropy.units.Quantity`, adu
+        Gaussian read noise per frame, 4.8 ADU (paper, Sec. 3.2).
+    dither_start : `~astropy.units.Quantity`, adu
+        Initial dither offset, 32 ADU (paper, Sec. 3.2).
+    dither_step : `~astropy.units.Quantity`, adu
+        Dither increment, 2 ADU (paper, Sec. 3.2).
+    dither_interval : int
+        The dither changes on every frame whose number is a multiple of this,
+        12 (paper, Sec. 3.2).
+    dither_cycle : int
+        Frames in one dither triangle (one minute at 60 fps), 3600; the dither
+        rises in the first half and falls in the second (design §3.11).
+    truncate_bits : int
+        Lowest bits dropped after accumulation, 3 (paper, Sec. 3.2).
+    v0 : `~astropy.units.Quantity`, velocity / angle
+        Doppler velocity per radian of GONG phase, 2151.86 m/s/rad (paper,
+        Eq. 5; c Δλ_m / (2π λ0) with c = 3e8 m/s, design §3.6).
+    integration_half_width : `~astropy.units.Quantity`, length
+        Half width of the wavelength range over which the filter chain is
+        integrated, 3 nm (design §3.8: Lyot side orders at ±0.75 and ±1.5 nm).
+    quadrature_step : `~astropy.units.Quantity`, length
+        Wavelength step of the filter-chain quadrature, 0.1 pm (300 points per
+        Michelson period).
+    reference_line_fwhm : `~astropy.units.Quantity`, length
+        FWHM of the Gaussian rest line used to fix the Michelson zero point,
+        10 pm (the solar Ni I line at disk centre, design §3.4).
+    reference_line_depth : `~astropy.units.Quantity`, dimensionless
+        Central depth of that line relative to the continuum, 0.6.
+
+    Examples
+    --------
+    >>> import astropy.units as u
+    >>> from gongsynth import GONGInstrument
+    >>> gong = GONGInstrument()
+    >>> gong.plate_scale
+    <Quantity 2.5 arcsec>
+    >>> GONGInstrument.from_toml(gong.to_toml()) == gong
+    True
+    >>> gong.replace(seeing_fwhm=2 * u.arcsec).seeing_fwhm
+    <Quantity 2. arcsec>
+    """
+
+    line_wavelength: u.Quantity = _param(676.78, u.nm, "Ni I rest wavelength (paper Sec. 2)")
+    lande_g: u.Quantity = _param(1.5, u.dimensionless_unscaled, "effective Lande factor (paper Eq. 9)")
+    prefilter_center: u.Quantity = _param(676.78, u.nm, "prefilter centre (paper Sec. 2)")
+    prefilter_fwhm: u.Quantity = _param(0.5, u.nm, "prefilter width w_p (paper Eqs. 1-2)")
+    prefilter_form: str = _plain("memo", str, "'memo' (paper Eq. 2) or 'ideal' (design 3.7)")
+    lyot_delta_h: u.Quantity = _param(608.0, u.um, "Lyot thickness parameter (paper Eq. 3)")
+    lyot_angle_1: u.Quantity = _param(67.7, u.deg, "Lyot element 1 angle (paper Eq. 3)")
+    lyot_angle_2: u.Quantity = _param(-45.3, u.deg, "Lyot element 2 angle, sign per design 3.3")
+    lyot_angle_3: u.Quantity = _param(93.0, u.deg, "Lyot element 3 angle (paper Eq. 3)")
+    michelson_fsr: u.Quantity = _param(0.305, u.AA, "Michelson free spectral range (paper Eq. 4)")
+    michelson_angle: u.Quantity = _param(8.2, u.deg, "Michelson phase offset theta_m (paper Eq. 4)")
+    waveplate_rate: u.Quantity = _param(5.0, u.Hz, "half-wave plate rotation rate (paper Sec. 2)")
+    frame_rate: u.Quantity = _param(60.0, u.Hz, "camera frame rate (paper Sec. 2)")
+    exposure_time: u.Quantity = _param(1 / 60, u.s, "exposure per frame (paper Sec. 3.2)")
+    lcvr_period: u.Quantity = _param(1.0, u.s, "time between LCVR switches (paper Sec. 2)")
+    aperture: u.Quantity = _param(2.8, u.cm, "effective aperture diameter (paper Sec. 2)")
+    plate_scale: u.Quantity = _param(2.5, u.arcsec, "detector pixel on the sky (paper Sec. 2)")
+    detector_shape: int = _plain(860, int, "detector side in pixels (GONG full disk)")
+    supersampling: int = _plain(5, int, "resampling factor before binning (paper Sec. 3.2)")
+    seeing_fwhm: u.Quantity = _param(3.6, u.arcsec, "Gaussian seeing FWHM (paper Sec. 3.2)")
+    effective_area: u.Quantity = _param(0.6, u.cm**2, "effective collecting area (paper Sec. 3.2)")
+    quantum_efficiency: u.Quantity = _param(0.16, u.dimensionless_unscaled, "CCD QE (paper Sec. 3.2)")
+    gain: u.Quantity = _param(33.0, u.electron / u.adu, "ADU conversion factor (paper Sec. 3.2)")
+    read_noise: u.Quantity = _param(4.8, u.adu, "read noise per frame (paper Sec. 3.2)")
+    dither_start: u.Quantity = _param(32, u.adu, "initial dither offset (paper Sec. 3.2)")
+    dither_step: u.Quantity = _param(2, u.adu, "dither increment (paper Sec. 3.2)")
+    dither_interval: int = _plain(12, int, "frames between dither steps (paper Sec. 3.2)")
+    dither_cycle: int = _plain(3600, int, "frames per dither triangle (design 3.11)")
+    truncate_bits: int = _plain(3, int, "low bits dropped after accumulation (paper Sec. 3.2)")
+    v0: u.Quantity = _param(2151.86, u.m / u.s / u.rad, "velocity per radian of phase (paper Eq. 5)")
+    integration_half_width: u.Quantity = _param(3.0, u.nm, "filter integration half range (design 3.8)")
+    quadrature_step: u.Quantity = _param(0.1, u.pm, "filter quadrature step")
+    reference_line_fwhm: u.Quantity = _param(10.0, u.pm, "rest line FWHM for the zero point (design 3.4)")
+    reference_line_depth: u.Quantity = _param(0.6, u.dimensionless_unscaled, "rest line depth (design 3.4)")
+
+    def __post_init__(self):
+        for f in fields(self):
+            kind = f.metadata[_UNIT]
+            value = getattr(self, f.name)
+            if kind is int:
+                if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+                    raise TypeError(
+                        f"GONGInstrument.{f.name} must be a non-negative int, got {value!r}"
+                    )
+            elif kind is str:
+                if f.name == "prefilter_form" and value not in PREFILTER_FORMS:
+                    raise ValueError(
+                        f"GONGInstrument.prefilter_form must be one of {PREFILTER_FORMS}, got {value!r}"
+                    )
+            else:
+                object.__setattr__(self, f.name, _as_quantity(f.name, value, kind))
+        if self.supersampling < 1 or self.detector_shape < 1:
+            raise ValueError("GONGInstrument.supersampling and detector_shape must be >= 1")
+
+    # ------------------------------------------------------------------ derived
+    @property
+    def frames_per_sector_cycle(self):
+        """Number of frames in one 90° period of the wave plate (3)."""
+        return int(round((self.frame_rate / (4 * self.waveplate_rate)).to_value(u.one)))
+
+    @property
+    def waveplate_step(self):
+        """Wave-plate rotation during one frame (30° by default), `~astropy.units.Quantity`."""
+        return (360 * u.deg * self.waveplate_rate / self.frame_rate).to(u.deg)
+
+    @property
+    def v0_from_fsr(self):
+        """
+        v0 = c Δλ_m / (2π λ0) computed with the exact speed of light.
+
+        Returns
+        -------
+        `~astropy.units.Quantity`
+            In m / s / rad (2150.4 for the defaults; the paper's 2151.86 used
+            c = 3e8 m/s).
+        """
+        v = const.c * self.michelson_fsr / (2 * math.pi * self.line_wavelength)
+        return (v / u.rad).to(u.m / u.s / u.rad)
+
+    @property
+    def gauss_per_velocity(self):
+        """
+        Conversion from the half difference of the I±V velocities to B_LOS.
+
+        B = 4π m_e c / (e g λ0) × (v⁺ - v⁻)/2 in Gaussian units (paper, Eq. 9).
+
+        Returns
+        -------
+        `~astropy.units.Quantity`
+            In G / (m / s); 0.7038 for g = 1.5 at 676.78 nm.
+        """
+        m_e = const.m_e.cgs.value
+        c = const.c.cgs.value
+        e = const.e.gauss.value
+        lam = self.line_wavelength.to_value(u.cm)
+        g = self.lande_g.to_value(u.one)
+        per_cm_s = 4 * math.pi * m_e * c / (e * g * lam)
+        return (per_cm_s * 100) * u.G / (u.m / u.s)
+
+    # --------------------------------------------------------------- utilities
+    def replace(self, **changes):
+        """
+        Return a copy with some parameters changed.
+
+        Parameters
+        ----------
+        **changes
+            Field names and their new values (Quantities with compatible units).
+
+        Returns
+        -------
+        `GONGInstrument`
+        """
+        unknown = set(changes) - {f.name for f in fields(self)}
+        if unknown:
+            raise TypeError(f"GONGInstrument has no parameter(s) {sorted(unknown)}")
+        return dataclasses.replace(self, **changes)
+
+    def __eq__(self, other):
+        if not isinstance(other, GONGInstrument):
+            return NotImplemented
+        return self._key() == other._key()
+
+    def __hash__(self):
+        return hash(self._key())
+
+    def _key(self):
+        """A hashable tuple of (name, value, unit string) for every field."""
+        key = []
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if isinstance(value, u.Quantity):
+                key.append((f.name, float(value.value), value.unit.to_string()))
+            else:
+                key.append((f.name, value))
+        return tuple(key)
+
+    def to_dict(self):
+        """
+        Every parameter as a TOML-ready value.
+
+        Quantities become strings such as ``"676.78 nm"`` whose number is the
+        shortest repr that round-trips exactly; ints and strings stay as they are.
+
+        Returns
+        -------
+        dict
+        """
+        out = {}
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if isinstance(value, u.Quantity) and value.unit == u.dimensionless_unscaled:
+                out[f.name] = float(value.value)
+            elif isinstance(value, u.Quantity):
+                out[f.name] = f"{float(value.value)!r} {value.unit.to_string()}"
+            else:
+                out[f.name] = value
+        return out
+
+    @classmethod
+    def from_dict(cls, mapping, *, where="instrument"):
+        """
+        Build an instrument from a mapping such as a parsed TOML table.
+
+        Parameters
+        ----------
+        mapping : dict
+            Parameter names to values: Quantities, strings like ``"3.6 arcsec"``,
+            plain numbers for dimensionless parameters, ints and strings.
+        where : str
+            Name of the table, used in error messages.
+
+        Returns
+        -------
+        `GONGInstrument`
+
+        Raises
+        ------
+        KeyError
+            If a key is not a parameter of the instrument.
+        """
+        known = {f.name: f for f in fields(cls)}
+        unknown = [k for k in mapping if k not in known]
+        if unknown:
+            raise KeyError(
+                f"unknown key(s) {unknown} in [{where}]; valid keys are {sorted(known)}"
+            )
+        kwargs = {}
+        for key, value in mapping.items():
+            kind = known[key].metadata[_UNIT]
+            if isinstance(kind, u.UnitBase) and isinstance(value, str):
+                try:
+                    value = u.Quantity(value)
+                except (TypeError, ValueError) as exc:
+                    raise ValueError(
+                        f"[{where}] {key} = {value!r} is not a quantity such as '1.0 {kind}'"
+                    ) from exc
+            kwargs[key] = value
+        return cls(**kwargs)
+
+    def to_toml(self):
+        """
+        The instrument as a TOML ``[instrument]`` table, one commented line each.
+
+        Returns
+        -------
+        str
+        """
+        lines = ["[instrument]"]
+        for f in fields(self):
+            value = self.to_dict()[f.name]
+            lines.append(f"# {f.metadata[_DOC]}")
+            lines.append(f"{f.name} = {_toml_value(value)}")
+        return "\n".join(lines) + "\n"
+
+    @classmethod
+    def from_toml(cls, source):
+        """
+        Read an instrument from TOML text or a path to a TOML file.
+
+        The parameters may sit at top level or in an ``[instrument]`` table.
+
+        Parameters
+        ----------
+        source : str or `pathlib.Path`
+            TOML text, or a path to a ``.toml`` file.
+
+        Returns
+        -------
+        `GONGInstrument`
+        """
+        if isinstance(source, Path) or (isinstance(source, str) and source.endswith(".toml")
+                                        and "\n" not in source):
+            text = Path(source).read_text()
+        else:
+            text = source
+        table = tomllib.loads(text)
+        if "instrument" in table:
+            extra = [k for k in table if k != "instrument"]
+            if extra:
+                raise KeyError(f"unknown top-level key(s) {extra} next to [instrument]")
+            table = table["instrument"]
+        return cls.from_dict(table)
+
+
+def _as_quantity(name, value, unit):
+    """Check that ``value`` is a Quantity convertible to ``unit`` (or a number if dimensionless)."""
+    if not isinstance(value, u.Quantity):
+        if unit == u.dimensionless_unscaled and isinstance(value, (int, float)) \
+                and not isinstance(value, bool):
+            return u.Quantity(float(value))
+        raise TypeError(
+            f"GONGInstrument.{name} must be an astropy Quantity in units of {unit} "
+            f"(e.g. {name}=1.0 * u.Unit('{unit}')), got {value!r}"
+        )
+    if not value.unit.is_equivalent(unit):
+        raise u.UnitsError(
+            f"GONGInstrument.{name} must have units convertible to '{unit}', got '{value.unit}'"
+        )
+    if value.ndim != 0 or not math.isfinite(float(value.value)):
+        raise ValueError(f"GONGInstrument.{name} must be a finite scalar, got {value!r}")
+    return value
+
+
+def _toml_value(value):
+    """Format a scalar as TOML."""
+    if isinstance(value, str):
+        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    return repr(value)
