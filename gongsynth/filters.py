@@ -30,6 +30,7 @@ import astropy.units as u
 import numpy as np
 
 from .instrument import GONGInstrument
+from .planes import N_CHANNELS
 from .validation import check_quantity, check_wavelength_grid
 
 __all__ = [
@@ -44,8 +45,6 @@ __all__ = [
     "reference_phase",
 ]
 
-#: Number of distinct wave-plate sectors (channels).
-N_CHANNELS = 3
 
 
 def _instrument(instrument):
