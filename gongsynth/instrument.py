@@ -19,6 +19,8 @@ from pathlib import Path
 import astropy.constants as const
 import astropy.units as u
 
+from .tomlfmt import toml_value
+
 __all__ = ["GONGInstrument", "PREFILTER_FORMS"]
 
 #: Accepted values of `GONGInstrument.prefilter_form`.
@@ -352,7 +354,7 @@ class GONGInstrument:
         for f in fields(self):
             value = self.to_dict()[f.name]
             lines.append(f"# {f.metadata[_DOC]}")
-            lines.append(f"{f.name} = {_toml_value(value)}")
+            lines.append(f"{f.name} = {toml_value(value)}")
         return "\n".join(lines) + "\n"
 
     @classmethod
@@ -402,10 +404,3 @@ def _as_quantity(name, value, unit):
     if value.ndim != 0 or not math.isfinite(float(value.value)):
         raise ValueError(f"GONGInstrument.{name} must be a finite scalar, got {value!r}")
     return value
-
-
-def _toml_value(value):
-    """Format a scalar as TOML."""
-    if isinstance(value, str):
-        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
-    return repr(value)
