@@ -1,0 +1,136 @@
+"""
+Sphinx configuration for the gongsynth documentation.
+
+Build (warnings are errors, every gallery example is executed)::
+
+    python -m sphinx -W --keep-going -b html docs docs/_build/html
+
+The build needs no network: intersphinx is off unless
+``GONGSYNTH_DOCS_INTERSPHINX=1`` is set, and the sunpy theme's remote search
+and analytics are switched off.
+"""
+import os
+import sys
+import warnings
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")  # examples must never open a window
+
+DOCS = Path(__file__).parent
+sys.path.insert(0, str(DOCS / "_ext"))
+
+import gongsynth  # noqa: E402
+
+# -- Project -----------------------------------------------------------------
+project = "gongsynth"
+author = "The gongsynth developers"
+copyright = "2026, The gongsynth developers"  # noqa: A001
+release = gongsynth.__version__
+version = ".".join(release.split(".")[:2])
+
+# -- General -----------------------------------------------------------------
+extensions = [
+    "sphinx.ext.autodoc",
+    "sphinx.ext.napoleon",
+    "sphinx.ext.mathjax",
+    "sphinx.ext.doctest",
+    "sphinx.ext.viewcode",
+    "sphinx_automodapi.automodapi",
+    "sphinx_automodapi.smart_resolver",
+    "sphinx_gallery.gen_gallery",
+    "gongsynth_params",
+]
+if os.environ.get("GONGSYNTH_DOCS_INTERSPHINX") == "1":  # needs the network
+    extensions.append("sphinx.ext.intersphinx")
+    intersphinx_mapping = {
+        "python": ("https://docs.python.org/3/", None),
+        "numpy": ("https://numpy.org/doc/stable/", None),
+        "astropy": ("https://docs.astropy.org/en/stable/", None),
+        "sunpy": ("https://docs.sunpy.org/en/stable/", None),
+        "matplotlib": ("https://matplotlib.org/stable/", None),
+        "dask": ("https://docs.dask.org/en/stable/", None),
+    }
+
+source_suffix = {".rst": "restructuredtext"}
+root_doc = "index"
+exclude_patterns = ["_build", "**.ipynb_checkpoints", "generated/gallery/*.ipynb",
+                    "generated/gallery/*.py", "generated/gallery/*.zip",
+                    "generated/gallery/*.md5", "generated/gallery/*.codeobj.json"]
+templates_path = ["_templates"]
+# `Quantity`-style single backticks in docstrings are object references; an
+# unresolved one (third-party, without intersphinx) renders as code, no warning.
+default_role = "obj"
+nitpicky = False
+suppress_warnings = []
+
+# -- autodoc / napoleon / automodapi -------------------------------------------
+autoclass_content = "class"
+autodoc_typehints = "none"  # units live in the docstrings, not in annotations
+autodoc_member_order = "bysource"
+napoleon_google_docstring = False
+napoleon_numpy_docstring = True
+napoleon_use_rtype = False
+napoleon_use_ivar = True
+automodapi_toctreedirnm = "api"
+automodapi_writereprocessed = False
+automodsumm_inherited_members = False
+numpydoc_show_class_members = False
+
+# -- sphinx-gallery ------------------------------------------------------------
+sphinx_gallery_conf = {
+    "examples_dirs": "../examples",
+    "gallery_dirs": "generated/gallery",
+    "filename_pattern": r"plot_",
+    "ignore_pattern": r"__init__\.py",
+    "abort_on_example_error": True,
+    "only_warn_on_example_error": False,
+    "plot_gallery": "True",
+    "matplotlib_animations": False,
+    "image_scrapers": ("matplotlib",),
+    "reset_modules": ("matplotlib",),
+    "remove_config_comments": True,
+    "download_all_examples": False,
+    "show_signature": False,
+    "doc_module": ("gongsynth",),
+    "reference_url": {"gongsynth": None},
+    "backreferences_dir": "generated/modules",
+    "within_subsection_order": "FileNameSortKey",
+    "min_reported_time": 1,
+}
+# Examples run headless; a plt.show() at the end of a script is a no-op under Agg.
+warnings.filterwarnings(
+    "ignore", category=UserWarning,
+    message="(Matplotlib is currently using agg|FigureCanvasAgg is non-interactive)",
+)
+
+# -- HTML ----------------------------------------------------------------------
+html_theme = "sunpy"
+html_title = f"gongsynth {release}"
+html_static_path = ["_static"]
+html_css_files = ["gongsynth.css"]
+html_theme_options = {
+    # Offline build and pages: no sunpy.org search, no analytics beacons.
+    "rtd_search": False,
+    "goatcounter_analytics_url": False,
+    "sst_is_root": True,
+    "sst_project_name": "gongsynth",
+    "navbar_links": [
+        ["User guide", "guide/index.html", 1],
+        ["Gallery", "generated/gallery/index.html", 1],
+        ["API", "api.html", 1],
+        ["Validation", "validation.html", 1],
+    ],
+    "footer_links": [
+        ["Changelog", "changelog.html", 1],
+        ["Citation", "citation.html", 1],
+    ],
+}
+html_last_updated_fmt = None
+ogp_site_url = "https://gongsynth.readthedocs.io/"
+ogp_use_first_image = False
+
+# -- gongsynth parameter tables (docs/_ext/gongsynth_params.py) -----------------
+# sphinxext-opengraph (loaded by the theme): no generated social-card images.
+ogp_social_cards = {"enable": False}
