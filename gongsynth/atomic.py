@@ -1,0 +1,79 @@
+"""
+Atomic, non-clobbering file output.
+
+Every file gongsynth writes goes to a temporary name in the destination
+directory and is renamed into place only once complete, so an interrupted
+write never leaves a half-written product; existing files are only replaced
+when the caller asks for it.
+"""
+import os
+import tempfile
+from contextlib import contextmanager
+from pathlib import Path
+
+__all__ = ["atomic_path", "check_writable"]
+
+
+def check_writable(paths, overwrite):
+    """
+    Refuse to go on if any of ``paths`` exists and ``overwrite`` is false.
+
+    Parameters
+    ----------
+    paths : iterable of path-like
+    overwrite : bool
+
+    Raises
+    ------
+    FileExistsError
+        Naming every file that would be overwritten.
+    """
+    existing = [str(p) for p in map(Path, paths) if p.exists()]
+    if existing and not overwrite:
+        raise FileExistsError(
+            f"refusing to overwrite existing file(s) {existing}; pass overwrite=True "
+            "(or --overwrite on the command line) to replace them"
+        )
+
+
+@contextmanager
+def atomic_path(path, *, overwrite=False):
+    """
+    Context manager yielding a temporary path that becomes ``path`` on success.
+
+    Parameters
+    ----------
+    path : path-like
+        Final destination.
+    overwrite : bool
+        Replace an existing file.
+
+    Yields
+    ------
+    `pathlib.Path`
+        Write the complete file here; it is renamed to ``path`` when the block
+        exits without an exception, and deleted otherwise.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> target = pathlib.Path(tempfile.mkdtemp()) / "out.txt"
+    >>> with atomic_path(target) as tmp:
+    ...     _ = tmp.write_text("done")
+    >>> target.read_text()
+    'done'
+    """
+    path = Path(path)
+    check_writable([path], overwrite)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
+    os.close(fd)
+    tmp = Path(tmp)
+    try:
+        yield tmp
+        if not overwrite and path.exists():  # appeared while we were writing
+            raise FileExistsError(f"refusing to overwrite {path}, which appeared during the write")
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()

@@ -1,0 +1,176 @@
+"""
+sunpy Maps of gongsynth products, and the map source that reads them back.
+
+Synthetic files must never pass for real GONG observations: they carry
+``ORIGIN = 'gongsynth'``, ``DTYPE = 'SIMULATED'`` and a ``TELESCOP`` that does
+not end in "GONG", so sunpy's GONG sources do not claim them.  Importing
+gongsynth registers `GONGSynthMap` with `sunpy.map.Map`, which then returns a
+GONGSynthMap with the right units and plot settings for any gongsynth FITS file.
+"""
+import astropy.units as u
+import matplotlib.colors as mcolors
+import numpy as np
+from astropy.coordinates import SkyCoord
+from astropy.time import Time
+from sunpy.coordinates import frames, get_earth
+from sunpy.map import GenericMap, make_fitswcs_header
+
+from . import __version__
+
+__all__ = ["GONGSynthMap", "PRODUCTS", "field_centre", "product_header", "make_product_map"]
+
+#: Product names, their FITS ``CONTENT`` and ``BUNIT``.
+PRODUCTS = {
+    "magnetogram": ("MAGNETOGRAM", u.G),
+    "doppler": ("DOPPLERGRAM", u.m / u.s),
+    "continuum": ("PSEUDO-CONTINUUM", u.adu),
+    "truth": ("TRUE B_LOS", u.G),
+}
+
+#: Symmetric display range of each signed product.
+_DISPLAY_RANGE = {"MAGNETOGRAM": 150, "TRUE B_LOS": 150, "DOPPLERGRAM": 1500}
+
+
+def field_centre(latitude, obstime):
+    """
+    Helioprojective coordinate of the point at ``latitude`` on the central meridian.
+
+    Parameters
+    ----------
+    latitude : `~astropy.units.Quantity`
+        Stonyhurst heliographic latitude (angle).
+    obstime : str or `~astropy.time.Time`
+        Observation time; the observer is at Earth's centre.
+
+    Returns
+    -------
+    `~astropy.coordinates.SkyCoord`
+        In the `~sunpy.coordinates.frames.Helioprojective` frame of that observer.
+
+    Examples
+    --------
+    >>> import astropy.units as u
+    >>> c = field_centre(0 * u.deg, "2020-06-06T06:30")
+    >>> abs(c.Tx) < 1 * u.arcsec, abs(c.Ty) < 1 * u.arcsec
+    (np.True_, np.True_)
+    """
+    obstime = Time(obstime)
+    observer = get_earth(obstime)
+    point = SkyCoord(0 * u.deg, latitude, frame=frames.HeliographicStonyhurst, obstime=obstime,
+                     rsun=695700 * u.km)
+    return point.transform_to(frames.Helioprojective(observer=observer, obstime=obstime))
+
+
+def product_header(shape, *, centre, scale, product, extra=None):
+    """
+    FITS header of a gongsynth product map with a helioprojective WCS.
+
+    Parameters
+    ----------
+    shape : tuple of int
+        (ny, nx) of the image.
+    centre : `~astropy.coordinates.SkyCoord`
+        Helioprojective coordinate of the image centre (see `field_centre`).
+    scale : `~astropy.units.Quantity`
+        Pixel size (angle per pixel).
+    product : str
+        One of `PRODUCTS`.
+    extra : dict, optional
+        More header cards (≤ 8-character keys), e.g. run parameters.
+
+    Returns
+    -------
+    `sunpy.util.MetaDict`
+    """
+    if product not in PRODUCTS:
+        raise ValueError(f"product must be one of {sorted(PRODUCTS)}, got {product!r}")
+    content, unit = PRODUCTS[product]
+    scale = u.Quantity(scale, u.arcsec / u.pix) if scale.unit.is_equivalent(u.arcsec / u.pix) \
+        else scale.to(u.arcsec) / u.pix
+    ny, nx = shape
+    header = make_fitswcs_header(
+        (ny, nx), centre,
+        reference_pixel=u.Quantity([(nx - 1) / 2, (ny - 1) / 2], u.pix),
+        scale=u.Quantity([scale, scale]),
+        telescope="gongsynth (simulated GONG)",
+        instrument="gongsynth",
+        observatory="gongsynth",
+        wavelength=676.78 * u.nm,
+        unit=unit,
+    )
+    header["origin"] = "gongsynth"
+    header["dtype"] = "SIMULATED"
+    header["content"] = content
+    header["gsvers"] = __version__
+    for key, value in (extra or {}).items():
+        header[key.lower()] = value
+    return header
+
+
+def make_product_map(data, *, centre, scale, product, extra=None):
+    """
+    A `GONGSynthMap` of one product.
+
+    Parameters
+    ----------
+    data : `~astropy.units.Quantity`
+        Image (ny, nx) in units convertible to the product's (G, m/s or adu).
+    centre, scale, product, extra
+        As for `product_header`.
+
+    Returns
+    -------
+    `GONGSynthMap`
+    """
+    unit = PRODUCTS[product][1]
+    values = u.Quantity(data).to_value(unit)
+    header = product_header(values.shape, centre=centre, scale=scale, product=product, extra=extra)
+    return GONGSynthMap(np.asarray(values, dtype=np.float32), header)
+
+
+class GONGSynthMap(GenericMap):
+    """
+    A map produced by gongsynth: a simulated GONG magnetogram, Dopplergram,
+    pseudo-continuum or the ground truth they are compared with.
+
+    Recognised by ``ORIGIN = 'gongsynth'`` in the header.  Magnetograms and
+    truth maps use sunpy's ``hmimag`` colormap over ±150 G, Dopplergrams a
+    diverging map over ±1.5 km/s, continua grey.
+
+    Examples
+    --------
+    >>> import astropy.units as u
+    >>> import numpy as np
+    >>> centre = field_centre(0 * u.deg, "2020-06-06T06:30")
+    >>> m = make_product_map(np.zeros((4, 4)) * u.G, centre=centre, scale=2.5 * u.arcsec,
+    ...                      product="magnetogram")
+    >>> type(m).__name__, m.unit, m.measurement
+    ('GONGSynthMap', Unit("G"), 'MAGNETOGRAM')
+    """
+
+    def __init__(self, data, header, **kwargs):
+        super().__init__(data, header, **kwargs)
+        content = str(self.meta.get("content", ""))
+        limit = _DISPLAY_RANGE.get(content)
+        if content in ("MAGNETOGRAM", "TRUE B_LOS"):
+            self.plot_settings["cmap"] = "hmimag"
+        elif content == "DOPPLERGRAM":
+            self.plot_settings["cmap"] = "RdBu_r"
+        else:
+            self.plot_settings["cmap"] = "gray"
+        if limit is not None:
+            self.plot_settings["norm"] = mcolors.Normalize(-limit, limit)
+
+    @property
+    def measurement(self):
+        """What the map holds (the header's ``CONTENT``)."""
+        return str(self.meta.get("content", ""))
+
+    @property
+    def observatory(self):
+        return "gongsynth"
+
+    @classmethod
+    def is_datasource_for(cls, data, header, **kwargs):
+        """Files written by gongsynth (``ORIGIN = 'gongsynth'``)."""
+        return str(header.get("origin", "")).strip().lower() == "gongsynth"
