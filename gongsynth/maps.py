@@ -76,7 +76,8 @@ def product_header(shape, *, centre, scale, product, extra=None):
     product : str
         One of `PRODUCTS`.
     extra : dict, optional
-        More header cards (≤ 8-character keys), e.g. run parameters.
+        More header cards (≤ 8-character keys), e.g. run parameters; a value
+        may be a ``(value, comment)`` pair.
 
     Returns
     -------
@@ -102,8 +103,12 @@ def product_header(shape, *, centre, scale, product, extra=None):
     header["dtype"] = "SIMULATED"
     header["content"] = content
     header["gsvers"] = __version__
+    comments = dict(header.get("keycomments", {}))
     for key, value in (extra or {}).items():
+        if isinstance(value, tuple):
+            value, comments[key.upper()] = value
         header[key.lower()] = value
+    header["keycomments"] = comments
     return header
 
 

@@ -1,0 +1,164 @@
+"""
+The ``gongsynth`` command line.
+
+::
+
+    gongsynth simulate [--config run.toml] [--latitude 60] [--duration 10] [--engine frames]
+                       [--seed 1] [--workers N] [--mode tiled|full-disk] [--shape 256]
+                       [--overwrite] [--quiet] --out DIR
+    gongsynth compare SIM.fits OBS.fits [--out FIGURE.png]
+    gongsynth config --print-defaults
+
+Exit codes: 0 success, 1 runtime failure, 2 bad usage or bad input (the
+message names the argument), 3 refusing to overwrite existing output.
+"""
+import argparse
+import sys
+from pathlib import Path
+
+import astropy.units as u
+
+from . import __version__
+
+__all__ = ["main", "build_parser"]
+
+EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_EXISTS = 0, 1, 2, 3
+
+
+def build_parser():
+    """
+    The argument parser of the ``gongsynth`` command.
+
+    Returns
+    -------
+    `argparse.ArgumentParser`
+    """
+    parser = argparse.ArgumentParser(
+        prog="gongsynth",
+        description="Simulate what GONG would have measured, end to end.")
+    parser.add_argument("--version", action="version", version=f"gongsynth {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    sim = sub.add_parser("simulate", help="run the simulator and save maps and raw planes")
+    sim.add_argument("--config", type=Path, help="TOML run configuration (see 'gongsynth config')")
+    sim.add_argument("--latitude", type=float, nargs="+", metavar="DEG",
+                     help="heliographic latitude(s) in degrees; several run a sweep "
+                          "(e.g. --latitude 0 25 45 60 70 75)")
+    sim.add_argument("--duration", type=float, metavar="MIN", help="observation length in minutes")
+    sim.add_argument("--engine", choices=("blocks", "frames"), help="camera engine")
+    sim.add_argument("--mode", choices=("tiled", "full-disk"), help="scene mode")
+    sim.add_argument("--seed", type=int, help="root random seed (default: fresh, recorded)")
+    sim.add_argument("--shape", type=int, metavar="N", help="detector side in pixels (default 860)")
+    sim.add_argument("--workers", type=int, metavar="N",
+                     help="parallel workers: threads for one run, Dask workers for a sweep")
+    sim.add_argument("--out", type=Path, required=True, help="output directory")
+    sim.add_argument("--overwrite", action="store_true", help="replace existing output files")
+    sim.add_argument("--quiet", action="store_true", help="no progress bars or messages")
+
+    cmp_ = sub.add_parser("compare", help="compare a simulated map with an observed one")
+    cmp_.add_argument("simulated", type=Path, help="gongsynth magnetogram FITS")
+    cmp_.add_argument("observed", type=Path, help="real GONG / HMI / MDI magnetogram FITS")
+    cmp_.add_argument("--out", type=Path, help="where to save the side-by-side figure (PNG)")
+    cmp_.add_argument("--overwrite", action="store_true", help="replace an existing figure")
+
+    cfg = sub.add_parser("config", help="print the default configuration as TOML")
+    cfg.add_argument("--print-defaults", action="store_true", required=True,
+                     help="print a complete, commented default configuration")
+    return parser
+
+
+def _simulation_config(args):
+    from .config import SimulationConfig
+
+    config = SimulationConfig.from_toml(args.config) if args.config else SimulationConfig()
+    changes = {}
+    if args.duration is not None:
+        changes["duration"] = args.duration * u.min
+    for name in ("engine", "mode", "seed", "workers"):
+        if getattr(args, name) is not None:
+            changes[name] = getattr(args, name)
+    if args.shape is not None:
+        changes["detector_shape"] = args.shape
+    if args.latitude and len(args.latitude) == 1:
+        changes["latitude"] = args.latitude[0] * u.deg
+    if args.seed is None and not args.config:
+        changes["seed"] = SimulationConfig.from_arguments().seed
+    return config.replace(**changes)
+
+
+def _run_simulate(args):
+    from .pipeline import simulate, simulate_many
+
+    config = _simulation_config(args)
+    progress = not args.quiet
+    if args.latitude and len(args.latitude) > 1:
+        latitudes = u.Quantity(args.latitude, u.deg)
+        results = simulate_many(latitudes=latitudes, config=config, workers=args.workers,
+                                progress=progress)
+        for result in results:
+            folder = args.out / f"lat{result.config.latitude.to_value(u.deg):+05.1f}"
+            result.save(folder, overwrite=args.overwrite)
+            _say(args, f"latitude {result.config.latitude:.1f}: wrote {folder}")
+    else:
+        result = simulate(config=config, progress=progress)
+        paths = result.save(args.out, overwrite=args.overwrite)
+        _say(args, "wrote " + ", ".join(str(p) for p in paths))
+        _say(args, result.summary())
+    return EXIT_OK
+
+
+def _run_compare(args):
+    from .compare import compare_files
+
+    report = compare_files(args.simulated, args.observed, out=args.out,
+                           overwrite=args.overwrite)
+    print(report)
+    return EXIT_OK
+
+
+def _say(args, message):
+    if not getattr(args, "quiet", False):
+        print(message)
+
+
+def main(argv=None):
+    """
+    Entry point of the ``gongsynth`` console script.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments (default ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        The exit code.
+    """
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        if args.command == "config":
+            from .config import SimulationConfig
+
+            print(SimulationConfig().to_toml(), end="")
+            return EXIT_OK
+        if args.command == "simulate":
+            return _run_simulate(args)
+        return _run_compare(args)
+    except FileExistsError as exc:
+        print(f"gongsynth: {exc}", file=sys.stderr)
+        return EXIT_EXISTS
+    except FileNotFoundError as exc:
+        print(f"gongsynth: file not found: {exc.filename or exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except (ValueError, TypeError, KeyError, u.UnitsError) as exc:
+        print(f"gongsynth: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        print("gongsynth: interrupted; no partial files were left behind", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
