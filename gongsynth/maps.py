@@ -31,6 +31,13 @@ PRODUCTS = {
 _DISPLAY_RANGE = {"MAGNETOGRAM": 150, "TRUE B_LOS": 150, "DOPPLERGRAM": 1500}
 
 
+def _product(product):
+    """(CONTENT, unit) of a product name, or a clear error."""
+    if product not in PRODUCTS:
+        raise ValueError(f"product must be one of {sorted(PRODUCTS)}, got {product!r}")
+    return PRODUCTS[product]
+
+
 def field_centre(latitude, obstime):
     """
     Helioprojective coordinate of the point at ``latitude`` on the central meridian.
@@ -83,9 +90,7 @@ def product_header(shape, *, centre, scale, product, extra=None):
     -------
     `sunpy.util.MetaDict`
     """
-    if product not in PRODUCTS:
-        raise ValueError(f"product must be one of {sorted(PRODUCTS)}, got {product!r}")
-    content, unit = PRODUCTS[product]
+    content, unit = _product(product)
     scale = u.Quantity(scale, u.arcsec / u.pix) if scale.unit.is_equivalent(u.arcsec / u.pix) \
         else scale.to(u.arcsec) / u.pix
     ny, nx = shape
@@ -127,7 +132,7 @@ def make_product_map(data, *, centre, scale, product, extra=None):
     -------
     `GONGSynthMap`
     """
-    unit = PRODUCTS[product][1]
+    unit = _product(product)[1]
     values = u.Quantity(data).to_value(unit)
     header = product_header(values.shape, centre=centre, scale=scale, product=product, extra=extra)
     return GONGSynthMap(np.asarray(values, dtype=np.float32), header)

@@ -1,0 +1,44 @@
+import astropy.units as u
+import numpy as np
+import pytest
+
+from gongsynth.calibration import calibration_curve, robust_slope
+
+
+def test_robust_slope_ignores_outliers():
+    rng = np.random.default_rng(4)
+    truth = rng.normal(0, 500, 4000)
+    measured = 0.93 * truth + rng.normal(0, 10, truth.size)
+    measured[:200] = -measured[:200]  # 5 % wrapped-like outliers
+    slope, scatter = robust_slope(truth, measured)
+    assert slope == pytest.approx(0.93, abs=3e-3)
+    assert scatter == pytest.approx(10, rel=0.15)
+
+
+def test_curve_recovers_known_slopes_and_errors():
+    rng = np.random.default_rng(7)
+    truth = np.concatenate([rng.normal(0, 20, 20000), rng.normal(0, 800, 2000)])
+    noise = 8.0
+    measured = np.where(np.abs(truth) >= 100, 0.8, 0.95) * truth + rng.normal(0, noise, truth.size)
+    curve = calibration_curve(measured * u.G, truth * u.G, n_boot=50, seed=1)
+    assert curve.strong.slope == pytest.approx(0.8, abs=3 * curve.strong.slope_error + 1e-3)
+    assert curve.quiet.slope == pytest.approx(0.95, abs=0.03)
+    # The bootstrap error is close to the analytic sigma / sqrt(sum t^2) of least squares.
+    strong = np.abs(truth) >= 100
+    analytic = noise / np.sqrt(np.sum(truth[strong] ** 2))
+    assert curve.strong.slope_error == pytest.approx(analytic, rel=0.5)
+    assert curve.strong.correction_factor == pytest.approx(1 / curve.strong.slope)
+    # Binned medians follow the input relation.
+    ok = (curve.counts > 50) & (np.abs(curve.bin_centres) > 200 * u.G)
+    assert np.allclose(curve.median[ok] / curve.bin_centres[ok], 0.8, atol=0.05)
+
+
+def test_curve_bad_input():
+    with pytest.raises(ValueError, match="same shape"):
+        calibration_curve(np.zeros(3) * u.G, np.zeros(4) * u.G)
+    with pytest.raises(ValueError, match="no finite pixels"):
+        calibration_curve(np.full(3, np.nan) * u.G, np.zeros(3) * u.G)
+    with pytest.raises(u.UnitsError, match="measured"):
+        calibration_curve(np.zeros(3) * u.m, np.zeros(3) * u.G)
+    with pytest.raises(TypeError, match="truth is required"):
+        calibration_curve(np.zeros(3) * u.G)
