@@ -1,0 +1,44 @@
+import subprocess
+import sys
+
+import pytest
+
+from gongsynth.cli import main
+from gongsynth.config import SimulationConfig
+
+
+def test_print_defaults_is_a_complete_valid_config(capsys):
+    assert main(["config", "--print-defaults"]) == 0
+    text = capsys.readouterr().out
+    assert "[simulation]" in text and "[instrument]" in text and "# " in text
+    assert SimulationConfig.from_toml(text) == SimulationConfig()
+
+
+def test_bad_config_key_exits_2_and_names_it(tmp_path, capsys):
+    path = tmp_path / "run.toml"
+    path.write_text('[simulation]\nlatitud = "30 deg"\n')
+    assert main(["simulate", "--config", str(path), "--out", str(tmp_path / "out")]) == 2
+    assert "latitud" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
+def test_missing_config_file_exits_2(tmp_path, capsys):
+    assert main(["simulate", "--config", str(tmp_path / "nope.toml"), "--out", str(tmp_path)]) == 2
+    assert "nope.toml" in capsys.readouterr().err
+
+
+def test_out_of_range_latitude_exits_2(tmp_path, capsys):
+    assert main(["simulate", "--latitude", "95", "--out", str(tmp_path / "o")]) == 2
+    assert "latitude" in capsys.readouterr().err
+
+
+def test_usage_errors_exit_2():
+    with pytest.raises(SystemExit) as info:
+        main(["simulate"])  # --out is required
+    assert info.value.code == 2
+
+
+def test_console_script_runs():
+    out = subprocess.run([sys.executable, "-m", "gongsynth.cli", "--version"], capture_output=True,
+                         text=True, check=True)
+    assert out.stdout.startswith("gongsynth ")
