@@ -114,7 +114,8 @@ def _latitude_geometry(latitude):
 
 def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="blocks", seed=None,
              instrument=None, mode="tiled", detector_shape=None, resolutions=(1, 2, 4, 8),
-             obstime=None, flat=None, dark=None, workers=None, progress=True, config=None):
+             obstime=None, photosphere_shape=(1024, 1024), photosphere_pixel_size=96 * u.km,
+             flat=None, dark=None, workers=None, progress=True, config=None):
     """
     Simulate a GONG observation end to end.
 
@@ -141,6 +142,10 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="bl
         Tiled mode: tile magnification of each quadrant.
     obstime : str or `~astropy.time.Time`, optional
         Observation time (default: a date with B0 ≈ 0).
+    photosphere_shape : tuple of int
+        Pixels of the built-in model photosphere (used when ``stokes`` is None).
+    photosphere_pixel_size : `~astropy.units.Quantity`
+        Its pixel size (length; 96 km like the paper's binned MURaM cube).
     flat, dark : optional
         Detector flat field and dark map (see `gongsynth.camera.integrate`);
         default the synthetic GONG-like ones.
@@ -166,7 +171,8 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="bl
     if config is None:
         kwargs = dict(latitude=latitude, duration=duration, engine=engine, mode=mode,
                       detector_shape=detector_shape, resolutions=tuple(resolutions),
-                      workers=workers)
+                      photosphere_shape=tuple(photosphere_shape),
+                      photosphere_pixel_size=photosphere_pixel_size, workers=workers)
         if obstime is not None:
             kwargs["obstime"] = obstime
         config = SimulationConfig.from_arguments(seed=seed, instrument=instrument, **kwargs)
@@ -361,7 +367,7 @@ def simulate_many(*, latitudes=(0, 25, 45, 60, 70, 75) * u.deg, seeds=None, conf
 
 def _config_kwargs(kwargs):
     allowed = {"duration", "engine", "seed", "instrument", "mode", "detector_shape", "resolutions",
-               "obstime", "workers"}
+               "obstime", "workers", "photosphere_shape", "photosphere_pixel_size"}
     bad = set(kwargs) - allowed
     if bad:
         raise TypeError(f"unknown simulate_many argument(s) {sorted(bad)}")
