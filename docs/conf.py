@@ -9,6 +9,7 @@ The build needs no network: intersphinx is off unless
 ``GONGSYNTH_DOCS_INTERSPHINX=1`` is set, and the sunpy theme's remote search
 and analytics are switched off.
 """
+import importlib.util
 import os
 import sys
 import warnings
@@ -35,13 +36,16 @@ extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.napoleon",
     "sphinx.ext.mathjax",
-    "sphinx.ext.doctest",
     "sphinx.ext.viewcode",
     "sphinx_automodapi.automodapi",
     "sphinx_automodapi.smart_resolver",
     "sphinx_gallery.gen_gallery",
     "gongsynth_params",
 ]
+# MathJax served from the built site itself, so equations render offline; without
+# the package the pages fall back to MathJax from its CDN (renders when online).
+if importlib.util.find_spec("sphinx-mathjax-offline") is not None:
+    extensions.append("sphinx-mathjax-offline")
 if os.environ.get("GONGSYNTH_DOCS_INTERSPHINX") == "1":  # needs the network
     extensions.append("sphinx.ext.intersphinx")
     intersphinx_mapping = {
@@ -64,6 +68,11 @@ templates_path = ["_templates"]
 default_role = "obj"
 nitpicky = False
 suppress_warnings = []
+# Docstrings write the field magnitude as |B| (plain text, also read in a
+# terminal); in RST that is a substitution reference, so define it as itself.
+rst_prolog = """
+.. |B| replace:: \\|B\\|
+"""
 
 # -- autodoc / napoleon / automodapi -------------------------------------------
 autoclass_content = "class"
@@ -98,6 +107,8 @@ sphinx_gallery_conf = {
     "backreferences_dir": "generated/modules",
     "within_subsection_order": "FileNameSortKey",
     "min_reported_time": 1,
+    # Show printed output, not the repr of a cell's last expression (Legend objects...).
+    "capture_repr": (),
 }
 # Examples run headless; a plt.show() at the end of a script is a no-op under Agg.
 warnings.filterwarnings(
@@ -134,3 +145,24 @@ ogp_use_first_image = False
 # -- gongsynth parameter tables (docs/_ext/gongsynth_params.py) -----------------
 # sphinxext-opengraph (loaded by the theme): no generated social-card images.
 ogp_social_cards = {"enable": False}
+
+
+# -- Roles used by third-party docstrings we inherit ----------------------------
+def setup(app):
+    """Render sphinxcontrib-bibtex's :cite:t: / :cite:p: as the plain citation key.
+
+    sunpy's GenericMap appends a note citing ``:cite:t:`...``` to the docstring
+    of every map subclass, so gongsynth's map source inherits it.
+    """
+    from docutils import nodes
+    from sphinx.domains import Domain
+
+    def as_text(name, rawtext, text, lineno, inliner, options=None, content=None):
+        return [nodes.emphasis(rawtext, text)], []
+
+    class CitationAsText(Domain):
+        name = "cite"
+        label = "citations rendered as their key"
+        roles = {"t": as_text, "p": as_text}
+
+    app.add_domain(CitationAsText)

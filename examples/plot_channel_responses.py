@@ -10,6 +10,7 @@ default parameters, from the broad passband of the prefilter and Lyot filter
 down to the three 30° wave-plate sectors that GONG records, and lays the Ni
 line on top of them (the paper's Fig. 5, right).
 """
+# sphinx_gallery_thumbnail_number = 2
 import astropy.constants as const
 import astropy.units as u
 import matplotlib.pyplot as plt
@@ -30,7 +31,7 @@ lam0 = gong.line_wavelength
 # (central peak 0.08 nm wide) select a narrow band around the line.  The Lyot
 # filter also transmits side orders 0.75 nm and 1.5 nm from the line, inside
 # the prefilter's wings: this is why gongsynth integrates the chain over
-# λ0 ± 3 nm and pads input spectra with their continuum.
+# :math:`\lambda_0 \pm 3` nm and pads input spectra with their continuum.
 
 wide = lam0 + np.linspace(-2, 2, 8001) * u.nm
 prefilter = prefilter_transmission(wide, gong)
@@ -43,17 +44,18 @@ ax.plot((wide - lam0).to_value(u.nm), prefilter * lyot, color="k", label="$R_p R
 ax.set_xlabel(r"$\lambda - \lambda_0$ [nm]")
 ax.set_ylabel("transmission")
 ax.set_title(f"GONG passband around Ni I {lam0.to_value(u.nm):.2f} nm")
-ax.legend(loc="upper right")
+ax.legend(loc="upper right", fontsize="small")
 
 # %%
 # The three channels
 # ------------------
 #
-# The Michelson interferometer adds a cos² fringe with a period of
-# Δλ_m = 0.305 Å; the half-wave plate, turning 30° per frame, slides the fringe
-# across the line.  Each frame averages one 30° sector, so the three distinct
-# channel responses R̄_0, R̄_1, R̄_2 are the fringe pattern shifted by a third of
-# a period, with its contrast reduced from 1 to sinc(π/3) by the averaging.
+# The Michelson interferometer adds a :math:`\cos^2` fringe with a period of
+# :math:`\Delta\lambda_m` = 0.305 Å; the half-wave plate, turning 30° per frame,
+# slides the fringe across the line.  Each frame averages one 30° sector, so the
+# three distinct channel responses :math:`\bar R_0, \bar R_1, \bar R_2` are the
+# fringe pattern shifted by a third of a period, with its contrast reduced from
+# 1 to :math:`\mathrm{sinc}(\pi/3) = 0.827` by the averaging.
 # The Ni line is drawn with the rest-line profile that the instrument uses as
 # its velocity zero point (FWHM ``reference_line_fwhm``, depth
 # ``reference_line_depth``).
@@ -85,12 +87,14 @@ print(f"modulation contrast after averaging a 30° sector: {modulation_amplitude
 # -------------------------
 #
 # Integrating a spectrum against the three responses gives three intensities;
-# their phase, φ = atan2(√3 (I₁ − I₂), 2I₀ − I₁ − I₂), moves with the line.
+# their phase, :math:`\phi = \operatorname{atan2}(\sqrt3 (I_1 - I_2),\ 2I_0 - I_1 - I_2)`,
+# moves with the line.
 # `~gongsynth.filters.channel_weights` turns a spectrum sampled on any grid
 # (here the paper's 51 points over 676.73–676.83 nm) into the three integrals
 # with one matrix product.  Shifting the line by ±200 m/s moves the phase by
-# about ∓0.09 rad: GONG's velocity scale v0 is about 2150 m/s per radian.
-# The slope this line actually has differs from v0 by about 1 %, because the
+# about ∓0.09 rad: GONG's velocity scale :math:`v_0` is about 2150 m/s per
+# radian.  The slope this line actually has differs from :math:`v_0` by about
+# 1 %, because the
 # line is not infinitely narrow; this is the origin of the measured/true
 # ratio of about 0.99 discussed in :ref:`decision-v0`.
 
