@@ -11,6 +11,7 @@ and analytics are switched off.
 """
 import importlib.util
 import os
+import re
 import sys
 import warnings
 from pathlib import Path
@@ -68,11 +69,6 @@ templates_path = ["_templates"]
 default_role = "obj"
 nitpicky = False
 suppress_warnings = []
-# Docstrings write the field magnitude as |B| (plain text, also read in a
-# terminal); in RST that is a substitution reference, so define it as itself.
-rst_prolog = """
-.. |B| replace:: \\|B\\|
-"""
 
 # -- autodoc / napoleon / automodapi -------------------------------------------
 autoclass_content = "class"
@@ -147,6 +143,33 @@ ogp_use_first_image = False
 ogp_social_cards = {"enable": False}
 
 
+# -- Docstring conventions --------------------------------------------------------
+# gongsynth docstrings write magnitudes as |B| or |true B|, readable in a
+# terminal.  In RST |...| is a substitution reference (an error under -W), so
+# escape such pairs in prose, leaving code (`...`), doctests, literal blocks
+# and tables alone.
+_BARS = re.compile(r"(?<![\\|])\|(?=[^\s|])([^|`\n]*?[^\s|\\])\|(?!\|)")
+
+
+def _escape_magnitude_bars(app, what, name, obj, options, lines):
+    literal_indent = None
+    for i, line in enumerate(lines):
+        stripped = line.lstrip()
+        indent = len(line) - len(stripped)
+        if literal_indent is not None:
+            if stripped and indent <= literal_indent:
+                literal_indent = None
+            else:
+                continue
+        if stripped.endswith("::"):
+            literal_indent = indent
+        if not stripped or stripped.startswith((">>>", "...", "|", "+")):
+            continue
+        parts = line.split("`")
+        parts[::2] = [_BARS.sub(r"\\|\1\\|", part) for part in parts[::2]]
+        lines[i] = "`".join(parts)
+
+
 # -- Roles used by third-party docstrings we inherit ----------------------------
 def setup(app):
     """Render sphinxcontrib-bibtex's :cite:t: / :cite:p: as the plain citation key.
@@ -166,3 +189,4 @@ def setup(app):
         roles = {"t": as_text, "p": as_text}
 
     app.add_domain(CitationAsText)
+    app.connect("autodoc-process-docstring", _escape_magnitude_bars)
