@@ -50,6 +50,7 @@ __all__ = [
     "field_centre",
     "sky_grid",
     "tile",
+    "tiled_scenes",
     "tiled_scene",
     "wcs_header",
 ]
@@ -70,8 +71,10 @@ class Scene:
     Parameters
     ----------
     data : `~astropy.units.Quantity`
-        Shape (6, NY, NX) (any leading length is accepted), radiance at Earth
-        per arcsec², in erg s⁻¹ cm⁻² arcsec⁻².
+        The light: shape (6, NY, NX), radiance at Earth per arcsec² in
+        erg s⁻¹ cm⁻² arcsec⁻².  A scene may also carry any other stack
+        (k, NY, NX) or map (NY, NX) placed with the same geometry, in any unit
+        (e.g. the true B_LOS in G).
     pixel_scale : `~astropy.units.Quantity`
         Grid spacing in arcsec (the same along both axes).
     header : `astropy.io.fits.Header` or dict
@@ -91,6 +94,9 @@ class Scene:
     placer : callable, optional
         ``placer(stack, pixel_size)`` places another stack with the scene's
         geometry (see `place`).
+    regions : list, optional
+        ``(row slice, column slice, magnification)`` of each region of the
+        supersampled grid (tiled scenes); default: one region at magnification 1.
 
     Examples
     --------
@@ -102,36 +108,65 @@ class Scene:
     """
 
     def __init__(self, data, pixel_scale, header, *, boundary, instrument=None, detector_shape=None,
-                 blos=None, centre=None, meta=None, placer=None):
+                 blos=None, centre=None, meta=None, placer=None, regions=None):
         from .optics import BOUNDARIES
-        check_quantity(data, EARTH_RADIANCE_UNIT, "data")
-        if data.ndim != 3:
-            raise ValueError(f"data must have shape (nplanes, ny, nx), got {data.shape}")
+        if not isinstance(data, u.Quantity):
+            raise TypeError(f"data must be an astropy Quantity, got {type(data).__name__}")
+        if data.ndim not in (2, 3):
+            raise ValueError(f"data must have shape (k, ny, nx) or (ny, nx), got {data.shape}")
         check_quantity(pixel_scale, u.arcsec, "pixel_scale")
         if boundary not in BOUNDARIES:
             raise ValueError(f"boundary must be one of {BOUNDARIES}, got {boundary!r}")
-        self.data = data.to(EARTH_RADIANCE_UNIT, copy=False)
+        self.data = data
         self.pixel_scale = pixel_scale.to(u.arcsec)
         self.header = header
         self.boundary = boundary
         self.instrument = _instrument(instrument)
         if detector_shape is None:
             ratio = (self.pixel_scale / self.instrument.plate_scale).to_value(u.one)
-            detector_shape = tuple(int(round(n * ratio)) for n in data.shape[1:])
+            detector_shape = tuple(int(round(n * ratio)) for n in data.shape[-2:])
         self.detector_shape = tuple(int(n) for n in detector_shape)
         if blos is not None:
             check_quantity(blos, u.G, "blos")
-            if blos.shape != data.shape[1:]:
-                raise ValueError(f"blos must have shape {data.shape[1:]}, got {blos.shape}")
+            if blos.shape != data.shape[-2:]:
+                raise ValueError(f"blos must have shape {data.shape[-2:]}, got {blos.shape}")
         self.blos = blos
         self.centre = centre
         self.meta = dict(meta or {})
         self._placer = placer
+        self.regions = (list(regions) if regions is not None
+                        else [(slice(0, data.shape[-2]), slice(0, data.shape[-1]), 1.0)])
 
     @property
     def shape(self):
-        """(nplanes, NY, NX)."""
+        """(nplanes, NY, NX) or (NY, NX)."""
         return self.data.shape
+
+    def resolution_map(self, instrument=None):
+        """
+        Magnification of the input at each detector pixel (1 = GONG resolution).
+
+        Parameters
+        ----------
+        instrument : `~gongsynth.GONGInstrument`, optional
+            Unused (the scene knows its detector grid); accepted for symmetry.
+
+        Returns
+        -------
+        `numpy.ndarray`
+            float64 (ny_det, nx_det): the magnification of the region holding
+            each detector pixel's centre (2**k in quadrant k of a Fig. 8 scene).
+        """
+        ny, nx = self.data.shape[-2:]
+        ndy, ndx = self.detector_shape
+        rows = ((np.arange(ndy) + 0.5) * ny / ndy).astype(int)
+        cols = ((np.arange(ndx) + 0.5) * nx / ndx).astype(int)
+        out = np.ones((ndy, ndx))
+        for rs, cs, mag in self.regions:
+            sel_r = (rows >= rs.start) & (rows < rs.stop)
+            sel_c = (cols >= cs.start) & (cols < cs.stop)
+            out[np.ix_(sel_r, sel_c)] = mag
+        return out
 
     @property
     def detector_header(self):
@@ -163,7 +198,7 @@ class Scene:
         return self._placer(stack, pixel_size)
 
     def __repr__(self):
-        return (f"<Scene {self.meta.get('mode', '')} {self.shape[0]}×{self.shape[1]}×{self.shape[2]} "
+        return (f"<Scene {self.meta.get('mode', '')} {'×'.join(map(str, self.shape))} "
                 f"at {self.pixel_scale:g}, detector {self.detector_shape}, boundary={self.boundary}>")
 
 
@@ -419,18 +454,20 @@ def _check_resolutions(resolutions):
     return res
 
 
-def _quadrants(shape, resolutions):
+def _quadrants(shape, resolutions, detector_shape):
     """(row slice, column slice, magnification) for each region of the grid."""
     ny, nx = shape
     if len(resolutions) == 1:
         return [(slice(0, ny), slice(0, nx), resolutions[0])]
-    hy, hx = ny // 2, nx // 2
+    # Split on a detector-pixel boundary so every GONG pixel has one resolution.
+    ndy, ndx = detector_shape
+    hy, hx = int(round(ndy // 2 * ny / ndy)), int(round(ndx // 2 * nx / ndx))
     spans = [(slice(0, hy), slice(0, hx)), (slice(0, hy), slice(hx, nx)),
              (slice(hy, ny), slice(0, hx)), (slice(hy, ny), slice(hx, nx))]
     return [(r, c, m) for (r, c), m in zip(spans, resolutions)]
 
 
-def _tile_stack(values, pixel_km, shape, scale, km_per_arcsec, mu, resolutions):
+def _tile_stack(values, pixel_km, shape, scale, km_per_arcsec, mu, regions):
     """Core of `tile` on plain float arrays (k, ny, nx) -> (k, NY, NX)."""
     k, ny, nx = values.shape
     NY, NX = shape
@@ -438,7 +475,7 @@ def _tile_stack(values, pixel_km, shape, scale, km_per_arcsec, mu, resolutions):
     # Sky offsets of pixel centres from the field centre, arcsec.
     y_sky = (np.arange(NY) + 0.5 - NY / 2) * scale
     x_sky = (np.arange(NX) + 0.5 - NX / 2) * scale
-    for rows, cols, mag in _quadrants(shape, resolutions):
+    for rows, cols, mag in regions:
         per_px_x = km_per_arcsec / (mag * pixel_km)       # tile pixels per arcsec along x
         per_px_y = km_per_arcsec / (mag * mu * pixel_km)  # ... along y (foreshortened)
         opy = _footprint_operator(ny / 2 + y_sky[rows] * per_px_y, scale * per_px_y, ny)
@@ -503,7 +540,7 @@ def tile(stack, pixel_size: u.km, *, latitude: u.deg = 0 * u.deg, resolutions=(1
     check_finite(values, "stack")
     inst = _instrument(instrument)
     res = _check_resolutions(resolutions)
-    grid, scale, _ = sky_grid(inst, detector_shape=detector_shape, shape=shape)
+    grid, scale, det = sky_grid(inst, detector_shape=detector_shape, shape=shape)
     mu, _ = viewing_geometry(lat * u.deg, obstime)
     _, km_per_arcsec = field_centre(lat * u.deg, obstime)
     kpa = km_per_arcsec.to_value(u.km / u.arcsec)
@@ -519,28 +556,104 @@ def tile(stack, pixel_size: u.km, *, latitude: u.deg = 0 * u.deg, resolutions=(1
             f"{extent[0]:.3g}″ × {extent[1]:.3g}″ on the sky at latitude {lat:g} deg (μ = {mu:.3g}): "
             f"smaller than one {plate:g}″ detector pixel"
         )
-    out = _tile_stack(values, pix, grid, scale.to_value(u.arcsec), kpa, mu, res)
+    out = _tile_stack(values, pix, grid, scale.to_value(u.arcsec), kpa, mu,
+                      _quadrants(grid, res, det))
     if squeeze:
         out = out[0]
     return out if unit is None else u.Quantity(out, unit, copy=False)
 
 
 @u.quantity_input
-def tiled_scene(source, *, pixel_size: u.km = None, latitude: u.deg = 0 * u.deg,
-                resolutions=(1, 2, 4, 8), obstime=None, instrument=None, detector_shape=None,
-                shape=None, mueller=None):
+def tiled_scenes(channels, blos, pixel_size: u.km, *, latitude: u.deg = 0 * u.deg,
+                 resolutions=(1, 2, 4, 8), obstime=None, instrument=None, detector_shape=None,
+                 shape=None):
     """
-    The paper's scene: a tile repeated over the detector field at one latitude.
+    The paper's tiled scene and its ground truth, placed with the same geometry.
 
     Parameters
     ----------
-    source : `~gongsynth.stokes.StokesCube` or `~astropy.units.Quantity`
-        A Stokes cube (collapsed with `gongsynth.polarimetry.channel_images`;
-        its ``blos`` is placed as the ground truth), or ready channel images
-        (6, ny, nx) in erg s⁻¹ cm⁻² sr⁻¹ at the Sun.  A cube's μ must match
-        the latitude (see `viewing_geometry`) to within 0.01.
-    pixel_size : `~astropy.units.Quantity`, optional
-        Tile column size (km); required for channel images, taken from the cube.
+    channels : `~astropy.units.Quantity`
+        Channel images at the Sun (6, ny, nx) in erg s⁻¹ cm⁻² sr⁻¹
+        (`gongsynth.polarimetry.channel_images`).
+    blos : `~astropy.units.Quantity` or None
+        True B_LOS (ny, nx) in G on the same grid (``StokesCube.blos``).
+    pixel_size : `~astropy.units.Quantity`
+        Tile column size (km).
+    latitude, resolutions, obstime, instrument, detector_shape, shape
+        As in `tile`.
+
+    Returns
+    -------
+    light : `Scene`
+        Radiance at Earth per arcsec² (6, NY, NX).  Boundary ``"periodic"``
+        when the field holds a whole number of tiles at a single resolution,
+        else ``"reflect"`` (the tiling continues smoothly past the edges).
+    truth : `Scene` or None
+        B_LOS (NY, NX) in G, same grid, boundary and WCS.
+
+    Examples
+    --------
+    >>> import astropy.units as u, numpy as np
+    >>> planes = np.full((6, 64, 64), 1.5e6) * u.Unit("erg / (s cm2 sr)")
+    >>> light, truth = tiled_scenes(planes, np.zeros((64, 64)) * u.G, 96 * u.km, detector_shape=32)
+    >>> light.shape, truth.shape, light.detector_shape
+    ((6, 160, 160), (160, 160), (32, 32))
+    """
+    from .polarimetry import CHANNEL_UNIT
+    inst = _instrument(instrument)
+    lat = _latitude_deg(latitude)
+    check_quantity(channels, CHANNEL_UNIT, "channels")
+    if channels.ndim != 3 or channels.shape[0] != N_PLANES:
+        raise ValueError(f"channels must have shape (6, ny, nx), got {channels.shape}")
+    if blos is not None:
+        check_quantity(blos, u.G, "blos")
+        if blos.shape != channels.shape[1:]:
+            raise ValueError(f"blos must have shape {channels.shape[1:]} like channels, got {blos.shape}")
+    kwargs = dict(latitude=lat * u.deg, resolutions=resolutions, obstime=obstime, instrument=inst,
+                  detector_shape=detector_shape, shape=shape)
+    data = radiance_at_earth(tile(channels, pixel_size, **kwargs))
+    mu, los_azimuth = viewing_geometry(lat * u.deg, obstime)
+    grid, scale, det = sky_grid(inst, detector_shape=detector_shape, shape=shape)
+    centre, km_per_arcsec = field_centre(lat * u.deg, obstime)
+    res = _check_resolutions(resolutions)
+    # Periodic only if the field holds whole tiles (one resolution, both axes).
+    kpa = km_per_arcsec.to_value(u.km / u.arcsec)
+    periods = [n * pixel_size.to_value(u.km) * f * res[0] / kpa
+               for n, f in zip(channels.shape[1:], (mu, 1.0))]
+    fields = [n * scale.to_value(u.arcsec) for n in grid]
+    whole = all(abs(f / p - round(f / p)) < 1e-6 for f, p in zip(fields, periods))
+    boundary = "periodic" if len(res) == 1 and whole else "reflect"
+
+    def placer(stack, size):
+        return tile(stack, size, **kwargs)
+
+    meta = dict(mode="tiled", latitude=lat * u.deg, resolutions=res, mu=mu, los_azimuth=los_azimuth,
+                obstime=_obstime(obstime), km_per_arcsec=km_per_arcsec,
+                tile_pixel_size=pixel_size.to(u.km))
+    common = dict(boundary=boundary, instrument=inst, detector_shape=det, centre=centre,
+                  placer=placer, regions=_quadrants(grid, res, det))
+    header = wcs_header(grid, scale, centre, inst)
+    truth = None
+    if blos is not None:
+        truth = Scene(placer(blos, pixel_size).to(u.G), scale, header, meta={**meta, "quantity": "blos"},
+                      **common)
+    light = Scene(data, scale, header, blos=None if truth is None else truth.data,
+                  meta={**meta, "quantity": "radiance"}, **common)
+    return light, truth
+
+
+@u.quantity_input
+def tiled_scene(stokes, *, latitude: u.deg = 0 * u.deg, resolutions=(1, 2, 4, 8), obstime=None,
+                instrument=None, detector_shape=None, shape=None, mueller=None):
+    """
+    The paper's scene from a Stokes cube: filter first, then tile.
+
+    Parameters
+    ----------
+    stokes : `~gongsynth.stokes.StokesCube`
+        Spectra of the tile; its μ must match the latitude (see
+        `viewing_geometry`) to within 0.01.  Its ``blos`` (if any) becomes the
+        scene's ``blos``.
     latitude, resolutions, obstime, instrument, detector_shape, shape
         As in `tile`.
     mueller : array_like, optional
@@ -549,64 +662,33 @@ def tiled_scene(source, *, pixel_size: u.km = None, latitude: u.deg = 0 * u.deg,
     Returns
     -------
     `Scene`
-        Radiance at Earth per arcsec² (6, NY, NX), boundary ``"periodic"`` when
-        the field holds a whole number of tiles at a single resolution, else
-        ``"reflect"``.
+        Radiance at Earth per arcsec² (6, NY, NX), with ``blos`` placed alike.
 
     Examples
     --------
     >>> import astropy.units as u, numpy as np
-    >>> planes = np.full((6, 64, 64), 1.5e6) * u.Unit("erg / (s cm2 sr)")
-    >>> scene = tiled_scene(planes, pixel_size=96 * u.km, detector_shape=32)
-    >>> scene.shape, scene.detector_shape
-    ((6, 160, 160), (32, 32))
+    >>> from gongsynth.stokes import StokesCube
+    >>> lam = np.linspace(676.73, 676.83, 51) * u.nm
+    >>> I = np.full((32, 32, 51), 3e14, dtype=np.float32) * u.Unit("erg / (s cm2 sr cm)")
+    >>> cube = StokesCube(I, 0 * I, 0 * I, 0 * I, lam, 192 * u.km)
+    >>> tiled_scene(cube, resolutions=(1,), detector_shape=16).shape
+    (6, 80, 80)
     """
-    from .polarimetry import CHANNEL_UNIT, channel_images
-    inst = _instrument(instrument)
+    from .polarimetry import channel_images
+    if not hasattr(stokes, "wavelength") or not hasattr(stokes, "pixel_size"):
+        raise TypeError(f"stokes must be a StokesCube, got {type(stokes).__name__}")
     lat = _latitude_deg(latitude)
     mu, los_azimuth = viewing_geometry(lat * u.deg, obstime)
-    blos = None
-    if isinstance(source, u.Quantity):
-        check_quantity(source, CHANNEL_UNIT, "source")
-        if source.ndim != 3 or source.shape[0] != N_PLANES:
-            raise ValueError(f"channel images must have shape (6, ny, nx), got {source.shape}")
-        if pixel_size is None:
-            raise ValueError("pixel_size is required when source is an array of channel images")
-        planes = source
-    else:
-        if not hasattr(source, "wavelength"):
-            raise TypeError(
-                f"source must be a StokesCube or a Quantity (6, ny, nx), got {type(source).__name__}"
-            )
-        if np.ndim(source.mu) == 0 and abs(float(source.mu) - mu) > 0.01:
-            raise ValueError(
-                f"the StokesCube was synthesised at mu = {float(source.mu):.4g} but latitude "
-                f"{lat:g} deg is seen at mu = {mu:.4g}: synthesise it at that mu "
-                f"(and los_azimuth {los_azimuth:g})"
-            )
-        pixel_size = source.pixel_size if pixel_size is None else pixel_size
-        planes = channel_images(source, mueller=mueller, instrument=inst)
-        blos = source.blos
-    kwargs = dict(latitude=lat * u.deg, resolutions=resolutions, obstime=obstime, instrument=inst,
-                  detector_shape=detector_shape, shape=shape)
-    data = radiance_at_earth(tile(planes, pixel_size, **kwargs))
-    grid, scale, det = sky_grid(inst, detector_shape=detector_shape, shape=shape)
-    centre, km_per_arcsec = field_centre(lat * u.deg, obstime)
-    res = _check_resolutions(resolutions)
-    # Periodic only if the field holds whole tiles (one resolution, both axes).
-    periods = [n * pixel_size.to_value(u.km) * f / km_per_arcsec.to_value(u.km / u.arcsec) * res[0]
-               for n, f in zip(planes.shape[1:], (mu, 1.0))]
-    field = [n * scale.to_value(u.arcsec) for n in grid]
-    whole = all(abs(f / p - round(f / p)) < 1e-6 for f, p in zip(field, periods))
-    boundary = "periodic" if len(set(res)) == 1 and whole else "reflect"
-
-    def placer(stack, size):
-        return tile(stack, size, **kwargs)
-
-    meta = dict(mode="tiled", latitude=lat * u.deg, resolutions=res, mu=mu, los_azimuth=los_azimuth,
-                obstime=_obstime(obstime), km_per_arcsec=km_per_arcsec,
-                tile_pixel_size=pixel_size.to(u.km))
-    return Scene(data, scale, wcs_header(grid, scale, centre, inst), boundary=boundary,
-                 instrument=inst, detector_shape=det,
-                 blos=None if blos is None else placer(blos, pixel_size),
-                 centre=centre, meta=meta, placer=placer)
+    if np.ndim(stokes.mu) != 0:
+        raise ValueError("stokes has a per-column mu (a full-disk cube); tiled scenes need one mu")
+    if abs(float(stokes.mu) - mu) > 0.01:
+        raise ValueError(
+            f"stokes was synthesised at mu = {float(stokes.mu):.4g} but latitude {lat:g} deg is "
+            f"seen at mu = {mu:.4g}: synthesise it at that mu (los_azimuth {los_azimuth:g})"
+        )
+    inst = _instrument(instrument)
+    planes = channel_images(stokes, mueller=mueller, instrument=inst)
+    light, _ = tiled_scenes(planes, stokes.blos, stokes.pixel_size, latitude=lat * u.deg,
+                            resolutions=resolutions, obstime=obstime, instrument=inst,
+                            detector_shape=detector_shape, shape=shape)
+    return light
