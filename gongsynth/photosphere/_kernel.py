@@ -1,0 +1,113 @@
+"""
+Numba kernel of the Milne–Eddington (Unno–Rachkovsky) synthesis.
+
+The Voigt and Faraday–Voigt functions are the real and imaginary parts of the
+Faddeeva function w(v + i a), tabulated once per damping on a fine grid
+(step 0.002 Doppler widths, linear interpolation: error < 2e-6 of the peak)
+and continued by the asymptotic series beyond |v| = 40.
+"""
+import functools
+import math
+
+import numba as nb
+import numpy as np
+from scipy.special import wofz
+
+__all__ = ["voigt_table", "voigt_lookup", "me_kernel", "TABLE_VMAX", "TABLE_STEP"]
+
+#: Half range and step of the Voigt table, in Doppler widths.
+TABLE_VMAX = 40.0
+TABLE_STEP = 0.002
+_SQRT_PI = math.sqrt(math.pi)
+
+
+@functools.lru_cache(maxsize=8)
+def voigt_table(damping):
+    """
+    Re and Im of w(v + i a) on v = -TABLE_VMAX..TABLE_VMAX (step TABLE_STEP).
+
+    Parameters
+    ----------
+    damping : float
+        Voigt damping parameter a.
+
+    Returns
+    -------
+    (`numpy.ndarray`, `numpy.ndarray`)
+        The absorption (H, peak ≈ 1 for small a) and dispersion (Im w) profiles.
+    """
+    n = int(round(2 * TABLE_VMAX / TABLE_STEP)) + 1
+    v = -TABLE_VMAX + TABLE_STEP * np.arange(n)
+    w = wofz(v + 1j * float(damping))
+    re, im = np.ascontiguousarray(w.real), np.ascontiguousarray(w.imag)
+    re.flags.writeable = False
+    im.flags.writeable = False
+    return re, im
+
+
+@nb.njit(inline="always", cache=True)
+def voigt_lookup(v, a, tab_re, tab_im):
+    """(Re w, Im w) at v + i a: table interpolation inside, asymptotic series outside."""
+    x = (v + TABLE_VMAX) * (1.0 / TABLE_STEP)
+    if x >= 0.0 and x < tab_re.size - 1:
+        i = int(x)
+        t = x - i
+        return (tab_re[i] + t * (tab_re[i + 1] - tab_re[i]),
+                tab_im[i] + t * (tab_im[i + 1] - tab_im[i]))
+    z = complex(v, a)
+    iz2 = 1.0 / (z * z)
+    w = 1j / (_SQRT_PI * z) * (1.0 + iz2 * (0.5 + iz2 * (0.75 + 1.875 * iz2)))
+    return w.real, w.imag
+
+
+@nb.njit(parallel=True, cache=True)
+def me_kernel(vgrid, vshift, vzeeman, cosg, qfac, ufac, bmu, scale, eta0, damping,
+              tab_re, tab_im, out_i, out_q, out_u, out_v):
+    """
+    Fill ``out_*`` (ny, nx, nλ) float32 with the Unno–Rachkovsky Stokes spectra.
+
+    Per column (ny, nx) float64 inputs: ``vshift`` Doppler shift and
+    ``vzeeman`` Zeeman splitting in Doppler widths, ``cosg`` = cosγ (field to
+    line of sight), ``qfac`` = sin²γ cos2χ, ``ufac`` = sin²γ sin2χ, ``bmu`` = βμ,
+    ``scale`` = continuum / (1 + βμ).  ``vgrid`` = (λ - λ0)/Δλ_D.
+    """
+    ny, nx = vshift.shape
+    nl = vgrid.size
+    for iy in nb.prange(ny):
+        for ix in range(nx):
+            vs = vshift[iy, ix]
+            vb = vzeeman[iy, ix]
+            c = cosg[iy, ix]
+            fq = qfac[iy, ix]
+            fu = ufac[iy, ix]
+            b = bmu[iy, ix]
+            s = scale[iy, ix]
+            sin2 = 1.0 - c * c
+            cos2p1 = 1.0 + c * c
+            for j in range(nl):
+                v = vgrid[j] - vs
+                hp, fp = voigt_lookup(v, damping, tab_re, tab_im)
+                if vb != 0.0:
+                    hb, fb = voigt_lookup(v + vb, damping, tab_re, tab_im)
+                    hr, fr = voigt_lookup(v - vb, damping, tab_re, tab_im)
+                else:
+                    hb, fb, hr, fr = hp, fp, hp, fp
+                hs = 0.5 * (hb + hr)
+                fs = 0.5 * (fb + fr)
+                ei = 0.5 * eta0 * (hp * sin2 + hs * cos2p1)
+                eq = 0.5 * eta0 * (hp - hs) * fq
+                eu = 0.5 * eta0 * (hp - hs) * fu
+                ev = 0.5 * eta0 * (hr - hb) * c
+                rq = 0.5 * eta0 * (fp - fs) * fq
+                ru = 0.5 * eta0 * (fp - fs) * fu
+                rv = 0.5 * eta0 * (fr - fb) * c
+                k = 1.0 + ei
+                k2 = k * k
+                r2 = rq * rq + ru * ru + rv * rv
+                pi_ = eq * rq + eu * ru + ev * rv
+                delta = k2 * (k2 - eq * eq - eu * eu - ev * ev + r2) - pi_ * pi_
+                f = b / delta
+                out_i[iy, ix, j] = s * (1.0 + f * k * (k2 + r2))
+                out_q[iy, ix, j] = -s * f * (k2 * eq + k * (ev * ru - eu * rv) + rq * pi_)
+                out_u[iy, ix, j] = -s * f * (k2 * eu + k * (eq * rv - ev * rq) + ru * pi_)
+                out_v[iy, ix, j] = -s * f * (k2 * ev + k * (eu * rq - eq * ru) + rv * pi_)
