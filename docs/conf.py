@@ -42,6 +42,7 @@ extensions = [
     "sphinx_automodapi.smart_resolver",
     "sphinx_gallery.gen_gallery",
     "gongsynth_params",
+    "gongsynth_cli",
 ]
 # MathJax served from the built site itself, so equations render offline; without
 # the package the pages fall back to MathJax from its CDN (renders when online).
@@ -138,7 +139,6 @@ html_last_updated_fmt = None
 ogp_site_url = "https://gongsynth.readthedocs.io/"
 ogp_use_first_image = False
 
-# -- gongsynth parameter tables (docs/_ext/gongsynth_params.py) -----------------
 # sphinxext-opengraph (loaded by the theme): no generated social-card images.
 ogp_social_cards = {"enable": False}
 
