@@ -49,6 +49,7 @@ __all__ = [
     "psf_kernel",
     "normalize_kernel",
     "convolve",
+    "PIXELIZE_METHODS",
     "pixelize",
     "observe",
     "photometric_factor",
@@ -80,13 +81,18 @@ def _seeing_sigma(inst):
     return inst.seeing_fwhm.to_value(u.arcsec) / (2 * math.sqrt(2 * math.log(2)))
 
 
+@functools.lru_cache(maxsize=1)
+def _hankel_nodes():
+    """Gauss-Legendre nodes and weights on [0, 1] (an eigenproblem: compute once)."""
+    x, w = np.polynomial.legendre.leggauss(_N_HANKEL)
+    return 0.5 * (x + 1), 0.5 * w
+
+
 def _profile(radius, inst):
     """PSF(r) per arcsec² for radii in arcsec (ndarray, any shape)."""
     nu_c = _cutoff_per_arcsec(inst)
     sigma = _seeing_sigma(inst)
-    x, w = np.polynomial.legendre.leggauss(_N_HANKEL)
-    s = 0.5 * (x + 1)
-    w = 0.5 * w
+    s, w = _hankel_nodes()
     otf = (2 / math.pi) * (np.arccos(s) - s * np.sqrt(1 - s * s))
     otf *= np.exp(-2 * math.pi**2 * sigma**2 * (s * nu_c) ** 2)
     weight = 2 * math.pi * nu_c**2 * w * s * otf  # dν = ν_c ds, ν = ν_c s
@@ -221,7 +227,7 @@ def normalize_kernel(kernel, name="psf"):
 
     Examples
     --------
-    >>> normalize_kernel([[0, 1, 0], [1, 4, 1], [0, 1, 0]]).sum()
+    >>> float(normalize_kernel([[0, 1, 0], [1, 4, 1], [0, 1, 0]]).sum())
     1.0
     """
     if isinstance(kernel, u.Quantity):
@@ -346,8 +352,10 @@ def convolve(stack, kernel, *, boundary="periodic", workers=None):
 
 
 @functools.lru_cache(maxsize=32)
-def _axis_operator(n_in, n_det, factor, periodic):
+def _axis_operator(n_in, n_det, factor, periodic, method="bilinear"):
     """Sparse (n_det, n_in) matrix: bilinear resampling to n_det*factor samples, then mean of factor."""
+    if method == "area":
+        return _area_operator(n_in, n_det)
     n_fine = n_det * factor
     m = np.arange(n_fine)
     # Pixel centres: fine pixel m covers the same field as input pixel coordinate t.
@@ -369,6 +377,22 @@ def _axis_operator(n_in, n_det, factor, periodic):
     return op
 
 
+def _area_operator(n_in, n_det):
+    """Sparse (n_det, n_in) matrix: overlap of each detector pixel with the input pixels."""
+    width = n_in / n_det  # detector pixel in input pixels
+    start = np.arange(n_det) * width
+    first = np.floor(start).astype(np.int64)
+    span = int(math.ceil(width)) + 1
+    n = first[:, None] + np.arange(span)[None, :]
+    overlap = np.clip(np.minimum(start[:, None] + width, n + 1) - np.maximum(start[:, None], n), 0, None)
+    rows = np.repeat(np.arange(n_det), span)
+    cols = np.clip(n, 0, n_in - 1).ravel()
+    op = scipy.sparse.csr_matrix(((overlap / width).ravel(), (rows, cols)), shape=(n_det, n_in))
+    op.sum_duplicates()
+    op.eliminate_zeros()
+    return op
+
+
 def _detector_count(n, scale, plate, name):
     count = n * scale / plate
     nearest = round(count)
@@ -380,8 +404,12 @@ def _detector_count(n, scale, plate, name):
     return nearest
 
 
+#: Resampling methods of `pixelize`.
+PIXELIZE_METHODS = ("bilinear", "area")
+
+
 @u.quantity_input
-def pixelize(stack, pixel_scale: u.arcsec, *, instrument=None, periodic=False):
+def pixelize(stack, pixel_scale: u.arcsec, *, instrument=None, periodic=False, method="bilinear"):
     """
     Resample a stack bilinearly to ``supersampling`` × detector pixels, then bin.
 
@@ -390,8 +418,12 @@ def pixelize(stack, pixel_scale: u.arcsec, *, instrument=None, periodic=False):
     bilinear interpolation and binned ``supersampling`` × ``supersampling``.
     The result is the mean over each detector pixel (surface-brightness units
     are kept; multiply by the pixel solid angle for a flux).  When the input
-    already has that sampling the resampling is the identity and flux is
-    conserved exactly.
+    already has that sampling (the default grid of every gongsynth scene) the
+    resampling is the identity and flux is conserved exactly; from another
+    grid (the paper's 4096² over 860 pixels) bilinear interpolation conserves
+    the total to ~1e-6 after the PSF (~2e-5 without).  ``method="area"``
+    instead averages the input pixels' overlap with each detector pixel,
+    which conserves flux exactly on any grid.
 
     Parameters
     ----------
@@ -406,6 +438,9 @@ def pixelize(stack, pixel_scale: u.arcsec, *, instrument=None, periodic=False):
     periodic : bool
         Interpolate across the edges with wrap-around (periodic scenes) rather
         than holding the edge value.
+    method : {"bilinear", "area"}
+        ``"bilinear"``: the paper's resampling to ``supersampling`` samples per
+        detector pixel, then binning; ``"area"``: exact overlap averaging.
 
     Returns
     -------
@@ -421,6 +456,8 @@ def pixelize(stack, pixel_scale: u.arcsec, *, instrument=None, periodic=False):
     (2, 2)
     """
     inst = _instrument(instrument)
+    if method not in PIXELIZE_METHODS:
+        raise ValueError(f"method must be one of {PIXELIZE_METHODS}, got {method!r}")
     values, unit = _split_unit(stack, "stack")
     values = _check_stack(values, "stack")
     scale = float(pixel_scale.to_value(u.arcsec))
@@ -430,8 +467,8 @@ def pixelize(stack, pixel_scale: u.arcsec, *, instrument=None, periodic=False):
     ny, nx = values.shape[-2:]
     ndy = _detector_count(ny, scale, plate, "pixelize")
     ndx = _detector_count(nx, scale, plate, "pixelize")
-    opy = _axis_operator(ny, ndy, inst.supersampling, bool(periodic))
-    opx = _axis_operator(nx, ndx, inst.supersampling, bool(periodic))
+    opy = _axis_operator(ny, ndy, inst.supersampling, bool(periodic), method)
+    opx = _axis_operator(nx, ndx, inst.supersampling, bool(periodic), method)
     planes = values.reshape((-1, ny, nx))
     out = np.empty((planes.shape[0], ndy, ndx))
     for i, plane in enumerate(planes):
@@ -441,7 +478,7 @@ def pixelize(stack, pixel_scale: u.arcsec, *, instrument=None, periodic=False):
 
 @u.quantity_input
 def observe(stack, pixel_scale: u.arcsec, *, instrument=None, psf=None, boundary="periodic",
-            workers=None):
+            method="bilinear", workers=None):
     """
     PSF (optional) then pixelization of any stack: light and ground truth alike.
 
@@ -459,6 +496,8 @@ def observe(stack, pixel_scale: u.arcsec, *, instrument=None, psf=None, boundary
     boundary : {"periodic", "zero", "reflect"}
         Edge handling of the convolution (see `convolve`); ``"periodic"`` also
         makes the resampling wrap.
+    method : {"bilinear", "area"}
+        Resampling of `pixelize`.
     workers : int, optional
         Threads for the FFTs.
 
@@ -480,7 +519,8 @@ def observe(stack, pixel_scale: u.arcsec, *, instrument=None, psf=None, boundary
     kernel = _resolve_kernel(psf, pixel_scale.to_value(u.arcsec), inst)
     if kernel is not None:
         stack = convolve(stack, kernel, boundary=boundary, workers=workers)
-    return pixelize(stack, pixel_scale, instrument=inst, periodic=boundary == "periodic")
+    return pixelize(stack, pixel_scale, instrument=inst, periodic=boundary == "periodic",
+                    method=method)
 
 
 def photometric_factor(instrument=None):
@@ -501,8 +541,10 @@ def photometric_factor(instrument=None):
 
     Examples
     --------
-    >>> photometric_factor().unit
-    Unit("electron arcsec2 cm2 s / erg")
+    >>> import astropy.units as u
+    >>> f = photometric_factor()
+    >>> f.unit == u.electron / (u.erg / (u.s * u.cm**2 * u.arcsec**2))
+    True
     """
     inst = _instrument(instrument)
     photon = (const.h * const.c / inst.line_wavelength).to(u.erg)
