@@ -58,6 +58,16 @@ def default_config():
     return out.getvalue()
 
 
+def _depend_on_cli(directive):
+    """Re-read the page whenever the CLI or the configuration code changes."""
+    import inspect
+
+    from gongsynth import cli, config, instrument
+    env = directive.state.document.settings.env
+    for module in (cli, config, instrument):
+        env.note_dependency(inspect.getsourcefile(module))
+
+
 def _literal(text, language):
     block = nodes.literal_block(text, text)
     block["language"] = language
@@ -74,6 +84,7 @@ class CliHelp(Directive):
             text = cli_help(command)
         except ValueError as exc:
             raise self.error(str(exc))
+        _depend_on_cli(self)
         prompt = "$ gongsynth " + (f"{command} " if command else "") + "--help\n"
         return [_literal(prompt + text, "text")]
 
@@ -82,6 +93,7 @@ class DefaultConfig(Directive):
     has_content = False
 
     def run(self):
+        _depend_on_cli(self)
         return [_literal(default_config(), "toml")]
 
 

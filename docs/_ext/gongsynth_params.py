@@ -9,7 +9,7 @@ from the code.  Usage in an RST page::
        :stage: filters
 
 lists the parameters that belong to the filter-chain stage; without ``:stage:``
-every parameter is listed, grouped by stage.  A parameter that ``STAGES`` does
+every parameter is listed, one table per stage.  A parameter that ``STAGES`` does
 not mention still appears in the full table (under "Other"), so adding a field
 to the dataclass never drops it from the documentation.
 """
@@ -108,23 +108,32 @@ class ParameterTable(Directive):
             rows = parameter_rows(stage)
         except ValueError as exc:
             raise self.error(str(exc))
-        with_stage = stage is None
-        header = ["Parameter", "Default", "Meaning and source"] + (["Stage"] if with_stage else [])
-        widths = "25 20 55" + (" 20" if with_stage else "")
-        lines = [".. list-table::", "   :header-rows: 1", f"   :widths: {widths}",
-                 "   :class: gongsynth-parameters", ""]
-        lines.append("   * - " + header[0])
-        lines += [f"     - {h}" for h in header[1:]]
-        for name, value, doc, title in rows:
-            lines.append(f"   * - ``{name}``")
-            lines.append(f"     - ``{value}``")
-            lines.append(f"     - {doc}")
-            if with_stage:
-                lines.append(f"     - {title}")
+        lines = []
+        if stage is not None:
+            lines += _table(rows)
+        else:  # every parameter: one table per stage, in STAGES order, "Other" last
+            titles = list(dict.fromkeys(title for *_, title in rows))
+            for title in titles:
+                lines += [f".. rubric:: {title}", ""]
+                lines += _table([row for row in rows if row[3] == title]) + [""]
+        # Re-read this page whenever the instrument's source changes.
+        import inspect
+        from gongsynth import instrument
+        self.state.document.settings.env.note_dependency(inspect.getsourcefile(instrument))
         container = nodes.container()
         nested_parse_with_titles(self.state, StringList(lines, source="gongsynth-parameters"),
                                  container)
         return container.children
+
+
+def _table(rows):
+    """RST list-table lines for ``rows`` of `parameter_rows`."""
+    lines = [".. list-table::", "   :header-rows: 1", "   :widths: 34 18 48",
+             "   :class: gongsynth-parameters", "",
+             "   * - Parameter", "     - Default", "     - Meaning and source"]
+    for name, value, doc, _ in rows:
+        lines += [f"   * - ``{name}``", f"     - ``{value}``", f"     - {doc}"]
+    return lines
 
 
 def setup(app):
