@@ -38,19 +38,20 @@ class NiLine:
 
     Defaults are tuned so that the spatial mean of the default model
     photosphere (granular velocities included) at disk centre has a central
-    depth of ≈0.6 of the continuum and a FWHM of ≈10 pm, as the solar Ni I line
-    in the disk-centre atlas (and the reference line of
-    `~gongsynth.GONGInstrument`); a single static column is slightly deeper and
-    narrower (see ``tests/test_synthesis.py``).
+    depth of 0.60 of the continuum and a FWHM of 10.0 pm, as the solar Ni I line
+    at disk centre (and the reference line of `~gongsynth.GONGInstrument`); a
+    single static, field-free column is deeper and narrower (depth 0.67, FWHM
+    9.1 pm).  β = 4 was chosen, then Δλ_D and η0 fitted to those two numbers.
 
     Parameters
     ----------
     doppler_width : `~astropy.units.Quantity`, length
-        Doppler width Δλ_D (thermal + microturbulent; 2.4 pm ≈ 1.06 km/s).
+        Doppler width Δλ_D (thermal + microturbulent; 3.1 pm ≈ 1.37 km/s, of
+        which 1.2 km/s is thermal Ni at 5000 K).
     damping : float
         Voigt damping parameter a = Γ/(4π Δν_D) (0.05).
     line_strength : float
-        η0, ratio of line-centre to continuum opacity (5.0).
+        η0, ratio of line-centre to continuum opacity (5.6).
     source_gradient : float
         β = S1/S0, slope of the source function in continuum optical depth (4.0).
     continuum_intensity : `~astropy.units.Quantity`
@@ -73,9 +74,9 @@ class NiLine:
     1.426
     """
 
-    doppler_width: u.Quantity = 2.4 * u.pm
+    doppler_width: u.Quantity = 3.1 * u.pm
     damping: float = 0.05
-    line_strength: float = 5.0
+    line_strength: float = 5.6
     source_gradient: float = 4.0
     continuum_intensity: u.Quantity = 3.0e14 * u.Unit("erg / (s cm2 sr cm)")
     limb_darkening: tuple = NECKEL_LABS_676
