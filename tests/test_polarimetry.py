@@ -1,0 +1,148 @@
+"""Tests of gongsynth.polarimetry: Mueller matrices and the filter-first collapse."""
+import astropy.units as u
+import numpy as np
+import pytest
+
+from gongsynth import GONGInstrument
+from gongsynth import polarimetry
+from gongsynth.filters import channel_responses, channel_weights
+from gongsynth.optics import observe
+from gongsynth.photosphere import Photosphere, synthesize
+from gongsynth.polarimetry import (CHANNEL_UNIT, analyser_coefficients, channel_images,
+                                   polarized_spectra)
+from gongsynth.scene import radiance_at_earth, tile, tiled_scenes, viewing_geometry
+from gongsynth.stokes import RADIANCE_UNIT, StokesCube
+
+LAM = np.linspace(676.73, 676.83, 51) * u.nm
+
+
+def random_photosphere(shape, seed, pixel_size=400 * u.km):
+    rng = np.random.default_rng(seed)
+    return Photosphere(rng.uniform(0, 2500, shape) * u.G, rng.uniform(0, 180, shape) * u.deg,
+                       rng.uniform(-180, 180, shape) * u.deg, rng.normal(0, 1.5, shape) * u.km / u.s,
+                       rng.normal(0, 1.5, shape) * u.km / u.s, rng.normal(0, 1.5, shape) * u.km / u.s,
+                       rng.uniform(0.3, 1.2, shape), pixel_size, periodic=True)
+
+
+def random_cube(shape=(3, 4), seed=0):
+    rng = np.random.default_rng(seed)
+    arrays = [rng.normal(0, 1e13, shape + (LAM.size,)) for _ in range(4)]
+    arrays[0] = np.abs(arrays[0]) + 3e14
+    return StokesCube(*(a.astype(np.float32) * RADIANCE_UNIT for a in arrays), LAM, 96 * u.km)
+
+
+def test_ideal_analyser_is_i_plus_and_minus_v():
+    assert np.array_equal(analyser_coefficients(), [[1, 0, 0, 1], [1, 0, 0, -1]])
+
+
+def test_flat_spectrum_gives_the_integrated_channel_response():
+    inst = GONGInstrument()
+    level = 3.0e14 * RADIANCE_UNIT
+    one = np.ones((2, 2, LAM.size), dtype=np.float32)
+    cube = StokesCube(level * one, 0 * level * one, 0 * level * one, 0.1 * level * one, LAM, 96 * u.km)
+    planes = channel_images(cube, instrument=inst)
+    assert planes.unit == CHANNEL_UNIT and planes.shape == (6, 2, 2)
+    # Independent: the responses integrated on a fine grid over λ0 ± 3 nm.
+    fine = np.linspace(676.78 - 3, 676.78 + 3, 60001) * u.nm
+    integral = np.trapezoid(channel_responses(fine, inst).value, fine.to_value(u.cm), axis=1)
+    want = np.concatenate([1.1 * integral, 0.9 * integral]) * level.value
+    assert np.allclose(planes[:, 0, 0].value, want, rtol=1e-4)
+
+
+def test_channel_images_is_the_weighted_sum_of_the_polarised_spectra():
+    cube = random_cube()
+    weights = channel_weights(LAM).to_value(u.cm)
+    spectra = polarized_spectra(cube).to_value(RADIANCE_UNIT)
+    want = np.einsum("cl,pyxl->pcyx", weights, spectra).reshape(6, 3, 4)
+    got = channel_images(cube).to_value(CHANNEL_UNIT)
+    assert np.allclose(got, want, rtol=1e-12, atol=0)
+    # I+V and I-V from the cube's own arrays.
+    i, v = cube.I.value.astype(float), cube.V.value.astype(float)
+    assert np.allclose(spectra[0], i + v) and np.allclose(spectra[1], i - v)
+
+
+def test_general_mueller_global_per_wavelength_and_per_pixel_agree():
+    cube = random_cube(seed=1)
+    rng = np.random.default_rng(2)
+    m = np.eye(4) + 0.1 * rng.normal(size=(4, 4))
+    ref = channel_images(cube, mueller=m).value
+    per_wl = channel_images(cube, mueller=np.broadcast_to(m, (LAM.size, 4, 4))).value
+    per_px = channel_images(cube, mueller=np.broadcast_to(m, (3, 4, 4, 4))).value
+    assert np.allclose(per_wl, ref, rtol=1e-12) and np.allclose(per_px, ref, rtol=1e-12)
+    # By hand: plane p, channel c = W_c · (row0 + s_p row3) · S.
+    weights = channel_weights(LAM).to_value(u.cm)
+    stokes = np.stack([cube.I.value, cube.Q.value, cube.U.value, cube.V.value]).astype(float)
+    for p, sign in enumerate((1, -1)):
+        row = m[0] + sign * m[3]
+        spectrum = np.tensordot(row, stokes, axes=1)
+        assert np.allclose(ref[3 * p:3 * p + 3], np.einsum("cl,yxl->cyx", weights, spectrum))
+
+
+def test_crosstalk_mueller_moves_q_into_the_circular_signal():
+    cube = random_cube(seed=3)
+    m = np.eye(4)
+    m[3, 1] = 0.05  # 5 % of Q leaks into V
+    diff = channel_images(cube, mueller=m).value - channel_images(cube).value
+    q = channel_images(StokesCube(cube.Q * 0 + cube.I, cube.Q * 0, cube.U * 0, cube.Q, LAM, 96 * u.km)).value
+    i_only = channel_images(StokesCube(cube.I, cube.Q * 0, cube.U * 0, cube.V * 0, LAM, 96 * u.km)).value
+    q_integral = q[:3] - i_only[:3]  # channel integrals of Q
+    assert np.allclose(diff[:3], 0.05 * q_integral, rtol=1e-5)
+    assert np.allclose(diff[3:], -0.05 * q_integral, rtol=1e-5)
+
+
+def test_per_pixel_mueller_acts_pixel_by_pixel():
+    cube = random_cube(seed=4)
+    m = np.broadcast_to(np.eye(4), (3, 4, 4, 4)).copy()
+    m[1, 2] *= 2.0  # one pixel twice as bright
+    got = channel_images(cube, mueller=m).value
+    ref = channel_images(cube).value
+    assert np.allclose(got[:, 1, 2], 2 * ref[:, 1, 2])
+    mask = np.ones((3, 4), bool)
+    mask[1, 2] = False
+    assert np.array_equal(got[:, mask], ref[:, mask])
+
+
+def test_filter_first_equals_the_papers_literal_order():
+    """Mueller → PSF → pixelize → filter, per wavelength, on a small tiled scene."""
+    inst = GONGInstrument()
+    latitude = 60 * u.deg
+    mu, azimuth = viewing_geometry(latitude)
+    cube = synthesize(random_photosphere((16, 16), seed=5), mu=mu, los_azimuth=azimuth, instrument=inst)
+    rng = np.random.default_rng(6)
+    mueller = np.eye(4) + 0.02 * rng.normal(size=(cube.shape[2], 4, 4))  # chromatic cross-talk
+    geometry = dict(latitude=latitude, resolutions=(1, 2, 4, 8), detector_shape=12, instrument=inst)
+
+    # Filter first (gongsynth's order).
+    planes = channel_images(cube, mueller=mueller, instrument=inst)
+    light, truth = tiled_scenes(planes, cube.blos, cube.pixel_size, **geometry)
+    fast = observe(light.data, light.pixel_scale, instrument=inst, boundary=light.boundary)
+
+    # The paper's order, wavelength by wavelength.
+    weights = channel_weights(cube.wavelength, inst).to_value(u.cm)
+    spectra = polarized_spectra(cube, mueller=mueller)  # (2, ny, nx, nλ)
+    literal = np.zeros((6,) + fast.shape[1:])
+    for j in range(cube.shape[2]):
+        sky = radiance_at_earth(tile(spectra[..., j], cube.pixel_size, **geometry))
+        seen = observe(sky, light.pixel_scale, instrument=inst, boundary=light.boundary)
+        seen = seen.to_value(u.erg / (u.s * u.cm**3 * u.arcsec**2))
+        for p in range(2):
+            literal[3 * p:3 * p + 3] += weights[:, j, None, None] * seen[p]
+    fast = fast.to_value(u.erg / (u.s * u.cm**2 * u.arcsec**2))
+    assert np.max(np.abs(fast - literal)) < 1e-12 * np.max(np.abs(literal))
+
+
+@pytest.mark.parametrize("mueller, error, match", [
+    (np.eye(3), ValueError, "shape"),
+    (np.full((4, 4), np.nan), ValueError, "non-finite"),
+    (np.ones((5, 4, 4)), ValueError, "per-wavelength"),
+    (np.ones((2, 2, 4, 4)), ValueError, "per-pixel"),
+    (np.eye(4) * u.m, u.UnitsError, "dimensionless"),
+])
+def test_bad_mueller_matrices(mueller, error, match):
+    with pytest.raises(error, match=match):
+        channel_images(random_cube(), mueller=mueller)
+
+
+def test_module_exports():
+    for name in polarimetry.__all__:
+        assert hasattr(polarimetry, name)
