@@ -95,9 +95,20 @@ class _Grid:
         gy = np.fft.irfft2(2j * math.pi * self.ky * f, s=(self.ny, self.nx))
         return gx, gy
 
-    def noise(self, rng, sigma_km):
-        """Zero-mean, unit-variance Gaussian random field of correlation ~sigma_km."""
-        g = self.smooth(rng.standard_normal((self.ny, self.nx)), sigma_km)
+    def noise(self, rng, sigma_km, balanced=False):
+        """
+        Zero-mean, unit-variance Gaussian random field of correlation ~sigma_km.
+
+        ``balanced``: band-pass instead of low-pass (spectrum ∝ k² e^{-2π²σ²k²}),
+        so that the field has no power at large scales: flux balances within a
+        few σ, like mixed-polarity internetwork field.
+        """
+        g = rng.standard_normal((self.ny, self.nx))
+        f = np.fft.rfft2(g)
+        f *= np.exp(-2 * math.pi ** 2 * sigma_km ** 2 * self.k2)
+        if balanced:
+            f *= 2 * math.pi ** 2 * sigma_km ** 2 * self.k2
+        g = np.fft.irfft2(f, s=(self.ny, self.nx))
         g -= g.mean()
         return g / (g.std() or 1.0)
 
@@ -389,8 +400,11 @@ def model_photosphere(*, shape=(1024, 1024), pixel_size=96 * u.km, seed=0, spot=
     # Smoothing rounds the Voronoi polygons and gives the lanes a finite width.
     g = grid.smooth(amplitude[cell] * profile, 0.07 * gran)
     lanes = np.exp(-wall / (0.1 * gran))                  # 1 in the lanes, 0 in granule centres
-    g_int = _standardise(g + 0.2 * grid.noise(rng, 0.25 * gran))
-    g_vel = _standardise(g + 0.3 * grid.noise(rng, 0.25 * gran))
+    # Lanes are narrow and fast: a log-normal transform puts ~60 % of the area in
+    # (slower) upflows and the extremes in the downflows and dark lanes.
+    g = _standardise(g)
+    g_int = _standardise(-np.exp(-0.4 * _standardise(g + 0.2 * grid.noise(rng, 0.25 * gran))))
+    g_vel = _standardise(-np.exp(-0.6 * _standardise(g + 0.6 * grid.noise(rng, 0.25 * gran))))
     gx, gy = grid.gradient(grid.smooth(g, 0.1 * gran))
     scale_h = np.sqrt(np.mean(gx ** 2 + gy ** 2)) or 1.0
     vx_g, vy_g = -v_h * gx / scale_h, -v_h * gy / scale_h
@@ -453,10 +467,10 @@ def model_photosphere(*, shape=(1024, 1024), pixel_size=96 * u.km, seed=0, spot=
     quiet = (1 - spot_mask) * (1 - plage_cover)
     corr = max(300.0, 0.5 * grid.dx)
     w_in = (0.4 + 0.6 * lanes) * quiet
-    bz_in = grid.noise(rng, corr) * w_in
+    bz_in = grid.noise(rng, corr, balanced=True) * w_in
     bz_in *= in_v / (np.sqrt(np.mean(bz_in ** 2)) or 1.0) * math.sqrt(np.mean(quiet))
-    bx_in = grid.noise(rng, corr) * quiet * in_h / math.sqrt(2)
-    by_in = grid.noise(rng, corr) * quiet * in_h / math.sqrt(2)
+    bx_in = grid.noise(rng, corr, balanced=True) * quiet * in_h / math.sqrt(2)
+    by_in = grid.noise(rng, corr, balanced=True) * quiet * in_h / math.sqrt(2)
 
     # ---- combine: convection suppressed by strong field (spot, plage)
     magnetic = grid.smooth(np.abs(bz_el), 500.0)
