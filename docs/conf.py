@@ -163,7 +163,8 @@ def _escape_magnitude_bars(app, what, name, obj, options, lines):
                 continue
         if stripped.endswith("::"):
             literal_indent = indent
-        if not stripped or stripped.startswith((">>>", "...", "|", "+")):
+        # doctests, line blocks ("| text") and grid tables stay as they are
+        if not stripped or stripped == "|" or stripped.startswith((">>>", "...", "| ", "+-", "+=")):
             continue
         parts = line.split("`")
         parts[::2] = [_BARS.sub(r"\\|\1\\|", part) for part in parts[::2]]
