@@ -40,6 +40,7 @@ from sunpy.coordinates import frames
 
 from .instrument import GONGInstrument
 from .observations import BadHeaderWarning, load_observation
+from .statistics import _disk_values, _histogram  # one disk mask for both histograms
 from .statistics import (
     disk_centre_level,
     field_histogram,
@@ -399,13 +400,16 @@ def summarize_map(smap, label, *, instrument=None, degrade="auto", noise_box=60 
         scale = local_pixel_scale(smap)
     if smap.unit != u.G:
         smap = sunpy.map.Map(smap.quantity.to_value(u.G), {**smap.meta, "bunit": "G"})
+    values = _disk_values(smap, max_radius)
+    if values.size == 0:
+        raise ValueError(f"{label}: no finite pixel within {max_radius} solar radii of disk centre")
     return MapSummary(
         label=label,
         description=_describe_map(smap),
         pixel_scale=scale,
         degraded=bool(degrade),
-        histogram=field_histogram(smap, max_radius=max_radius),
-        abs_histogram=field_histogram(smap, max_radius=max_radius, absolute=True),
+        histogram=_histogram(values, u.G, None, False),
+        abs_histogram=_histogram(values, u.G, None, True),
         noise=noise_estimate(smap, box=noise_box),
         map=smap,
     )
@@ -450,11 +454,25 @@ class ComparisonReport:
         """`to_dict` as a JSON string."""
         return json.dumps(self.to_dict(), **kwargs)
 
-    def summary(self):
-        """A plain-text table of the main numbers."""
+    def __str__(self):
+        return self.summary()
+
+    def summary(self, *, figure=False):
+        """
+        A plain-text table of the main numbers.
+
+        Parameters
+        ----------
+        figure : bool
+            Short form for the figure panel (columns "sim" and "obs", no map descriptions).
+
+        Returns
+        -------
+        str
+        """
         s, o = self.sim.numbers(), self.obs.numbers()
-        rows = [
-            ("map", s["description"], o["description"]),
+        rows = [] if figure else [("map", s["description"], o["description"])]
+        rows += [
             ("pixel scale [arcsec]", f"{s['pixel_scale_arcsec']:.3f}", f"{o['pixel_scale_arcsec']:.3f}"),
             ("degraded to GONG", str(s["degraded"]), str(o["degraded"])),
             ("disk pixels", str(s["n_disk_pixels"]), str(o["n_disk_pixels"])),
@@ -467,8 +485,9 @@ class ComparisonReport:
                           ("p1", "1st percentile [G]"), ("p99", "99th percentile [G]")):
             rows.append((name, f"{s[key]:.2f}", f"{o[key]:.2f}"))
         width = max(len(r[0]) for r in rows)
-        col = max(len(self.sim.label), len(self.obs.label), *(len(r[1]) for r in rows))
-        lines = [f"{'':{width}}  {self.sim.label:>{col}}  {self.obs.label}"]
+        names = ("sim", "obs") if figure else (self.sim.label, self.obs.label)
+        col = max(len(names[0]), len(names[1]), *(len(r[1]) for r in rows))
+        lines = [f"{'':{width}}  {names[0]:>{col}}  {names[1]}"]
         lines += [f"{a:{width}}  {b:>{col}}  {c}" for a, b, c in rows]
         lines.append(f"{'KS distance of B':{width}}  {self.cdf_distance:>{col}.3f}")
         lines.append(f"{'noise ratio sim/obs':{width}}  {self.ratios['noise_sigma']:>{col}.3f}")
@@ -535,9 +554,10 @@ def _plot(report, fig):
 
     ax = fig.add_subplot(2, 3, 6)
     ax.axis("off")
-    ax.text(0, 1, report.summary(), family="monospace", fontsize=6.5, va="top", ha="left",
+    ax.text(0, 1, report.summary(figure=True), family="monospace", fontsize=7, va="top", ha="left",
             transform=ax.transAxes)
-    fig.tight_layout()
+    # Fixed margins: tight_layout costs more than the rest of the figure.
+    fig.subplots_adjust(left=0.06, right=0.98, bottom=0.07, top=0.93, wspace=0.35, hspace=0.35)
     return fig
 
 

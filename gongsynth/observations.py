@@ -266,7 +266,7 @@ def _check_kind(smap, header, kind, path, notes):
     return None
 
 
-def check_disk_footprint(smap, *, name="map"):
+def check_disk_footprint(smap, *, name="map", rho=None):
     """
     Check that the finite pixels of a full-disk image match the disk of its WCS.
 
@@ -281,6 +281,9 @@ def check_disk_footprint(smap, *, name="map"):
     smap : `~sunpy.map.GenericMap`
     name : str
         Name used in the warning (e.g. the file name).
+    rho : `numpy.ndarray`, optional
+        Distance of every pixel from disk centre in solar radii, if already
+        computed (`gongsynth.statistics.disk_coordinates`).
 
     Returns
     -------
@@ -309,7 +312,8 @@ def check_disk_footprint(smap, *, name="map"):
     finite = np.isfinite(np.asarray(smap.data, dtype=float))
     if finite.mean() > 0.95:
         return True
-    rho, _ = disk_coordinates(smap)
+    if rho is None:
+        rho, _ = disk_coordinates(smap)
     with np.errstate(invalid="ignore"):
         inner = rho < 0.9
         outer = rho > 1.1
@@ -330,16 +334,13 @@ def check_disk_footprint(smap, *, name="map"):
     return True
 
 
-def _mask_gong_sky(smap, header, step):
+def _mask_gong_sky(smap, header, step, rho):
     """NaN the GONG sky value (SKYVALUE) off the disk."""
     if "SKYVALUE" not in header:
         return smap
-    from .statistics import disk_coordinates
-
     sky = float(header["SKYVALUE"])
     tol = max(step, 1e-3)
     data = np.array(smap.data, dtype=float)
-    rho, _ = disk_coordinates(smap)
     with np.errstate(invalid="ignore"):
         sky_pixels = (np.abs(data - sky) <= tol) & ~(rho < 0.98)
     if not sky_pixels.any():
@@ -430,10 +431,13 @@ def load_observation(path, *, kind="magnetogram", repair=True):
         meta["bunit"] = "G"
         values = np.asarray(smap.data) * float(factor) if factor != 1 else smap.data
         smap = smap._new_instance(values, meta, plot_settings=smap.plot_settings)
-    if str(header.get("CTYPE1", "")).upper().startswith("GONG") or _is_gong_observation(header):
-        smap = _mask_gong_sky(smap, header, step)
     if isinstance(smap.coordinate_frame, frames.Helioprojective):
-        check_disk_footprint(smap, name=str(path))
+        from .statistics import disk_coordinates
+
+        rho, _ = disk_coordinates(smap)
+        if str(header.get("CTYPE1", "")).upper().startswith("GONG") or _is_gong_observation(header):
+            smap = _mask_gong_sky(smap, header, step, rho)
+        check_disk_footprint(smap, name=str(path), rho=rho)
     if notes:
         history = str(smap.meta.get("history", "")).rstrip()
         added = "\n".join(f"gongsynth.load_observation: {n}" for n in notes)

@@ -146,6 +146,23 @@ def _helioprojective(smap, coords):
     return coords.transform_to(hpc)
 
 
+def _is_hpc(smap):
+    return isinstance(smap.coordinate_frame, frames.Helioprojective)
+
+
+def _pixel_to_hpc(smap, x, y):
+    """Helioprojective (Tx, Ty) in arcsec of 0-based pixel positions."""
+    if _is_hpc(smap):
+        # Plain WCS arithmetic: no coordinate-frame machinery needed for the map's own frame.
+        tx, ty = smap.wcs.pixel_to_world_values(x, y)
+        units = [u.Unit(un) for un in smap.wcs.world_axis_units]
+        tx = (np.asarray(tx) * units[0]).to_value(u.arcsec)
+        ty = (np.asarray(ty) * units[1]).to_value(u.arcsec)
+        return (tx + 648000) % 1296000 - 648000, ty  # longitudes to [-180, 180) deg
+    c = _helioprojective(smap, smap.wcs.pixel_to_world(x, y))
+    return c.Tx.to_value(u.arcsec), c.Ty.to_value(u.arcsec)
+
+
 def disk_coordinates(smap):
     """
     Distance from disk centre (in solar radii) and μ = cos θ of every pixel.
@@ -181,9 +198,9 @@ def disk_coordinates(smap):
     (0.0, 1.0)
     """
     _check_map(smap)
-    coords = _helioprojective(smap, sunpy.map.all_coordinates_from_map(smap))
-    tx = coords.Tx.to_value(u.arcsec)
-    ty = coords.Ty.to_value(u.arcsec)
+    ny, nx = smap.data.shape
+    y, x = np.mgrid[:ny, :nx]
+    tx, ty = _pixel_to_hpc(smap, x, y)
     rho = np.hypot(tx, ty) / smap.rsun_obs.to_value(u.arcsec)
     with np.errstate(invalid="ignore"):
         mu = np.where(rho <= 1, np.sqrt(np.clip(1 - rho**2, 0, None)), np.nan)
@@ -226,8 +243,7 @@ def local_pixel_scale(smap, pixel=None):
     x, y = (float(p) for p in pixel)
     px = np.array([x - 0.5, x + 0.5, x, x])
     py = np.array([y, y, y - 0.5, y + 0.5])
-    c = _helioprojective(smap, smap.wcs.pixel_to_world(px, py))
-    tx, ty = c.Tx.to_value(u.arcsec), c.Ty.to_value(u.arcsec)
+    tx, ty = _pixel_to_hpc(smap, px, py)
     sx = np.hypot(tx[1] - tx[0], ty[1] - ty[0])
     sy = np.hypot(tx[3] - tx[2], ty[3] - ty[2])
     scale = np.sqrt(sx * sy)
@@ -243,6 +259,11 @@ def _hpc_frame(smap):
 
 def _world_to_pixel_hpc(smap, tx, ty):
     """0-based pixel positions of helioprojective points (arcsec) of the map's observer."""
+    if _is_hpc(smap):
+        units = [u.Unit(un) for un in smap.wcs.world_axis_units]
+        x, y = smap.wcs.world_to_pixel_values((np.atleast_1d(tx) * u.arcsec).to_value(units[0]),
+                                              (np.atleast_1d(ty) * u.arcsec).to_value(units[1]))
+        return np.asarray(x, dtype=float), np.asarray(y, dtype=float)
     c = SkyCoord(np.atleast_1d(tx) * u.arcsec, np.atleast_1d(ty) * u.arcsec, frame=_hpc_frame(smap))
     x, y = smap.wcs.world_to_pixel(c)
     return np.asarray(x, dtype=float), np.asarray(y, dtype=float)
@@ -371,6 +392,11 @@ def field_histogram(smap, *, bins=None, max_radius=0.98, absolute=False):
         raise ValueError(
             f"field_histogram: the map has no finite pixel within {max_radius} solar radii of disk centre"
         )
+    return _histogram(values, unit, bins, absolute)
+
+
+def _histogram(values, unit, bins, absolute):
+    """`FieldHistogram` of a 1-D array of finite values in ``unit``."""
     if absolute:
         values_h = np.abs(values)
         default = np.geomspace(1, 3000, 61)
@@ -571,8 +597,7 @@ def noise_estimate(smap, *, box=60 * u.arcsec, layout="grid", max_radius=0.35, g
         starts_y = np.arange(0, ny - n + 1, step)
         gx, gy = np.meshgrid(starts_x, starts_y)
         x0, y0 = gx.ravel(), gy.ravel()
-        c = _helioprojective(smap, smap.wcs.pixel_to_world(x0 + (n - 1) / 2, y0 + (n - 1) / 2))
-        tx, ty = c.Tx.to_value(u.arcsec), c.Ty.to_value(u.arcsec)
+        tx, ty = _pixel_to_hpc(smap, x0 + (n - 1) / 2, y0 + (n - 1) / 2)
         with np.errstate(invalid="ignore"):
             keep = np.hypot(tx, ty) <= max_radius * rsun * (1 + 1e-9)
         x0, y0, tx, ty = x0[keep], y0[keep], tx[keep], ty[keep]

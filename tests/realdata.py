@@ -13,6 +13,7 @@ files are built from sunpy's real GONG magnetogram header
 NSO stores them: 16-bit integers with BSCALE = 0.09504 G and the sky set to
 SKYVALUE = -2000 G.
 """
+import functools
 import hashlib
 import os
 from pathlib import Path
@@ -65,13 +66,16 @@ def gong_header():
     return fits.Header.fromtextfile(sunpy.data.test.get_test_filepath("gong_magnetogram.header"))
 
 
+@functools.lru_cache(maxsize=1)
 def gong_rho():
-    """Distance from disk centre in solar radii of every pixel of the GONG header's grid."""
+    """Distance from disk centre in solar radii of every pixel of the GONG header's grid (read-only)."""
     from gongsynth.statistics import disk_coordinates
 
     dummy = sunpy.data.test.get_dummy_map_from_header(
         sunpy.data.test.get_test_filepath("gong_magnetogram.header"))
-    return disk_coordinates(dummy)[0]
+    rho = disk_coordinates(dummy)[0]
+    rho.flags.writeable = False
+    return rho
 
 
 def write_gong_fits(path, data, header=None, *, sky=True):
