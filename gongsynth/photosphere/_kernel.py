@@ -64,50 +64,51 @@ def voigt_lookup(v, a, tab_re, tab_im):
 def me_kernel(vgrid, vshift, vzeeman, cosg, qfac, ufac, bmu, scale, eta0, damping,
               tab_re, tab_im, out_i, out_q, out_u, out_v):
     """
-    Fill ``out_*`` (ny, nx, nλ) float32 with the Unno–Rachkovsky Stokes spectra.
+    Fill ``out_*`` (npix, nλ) float32 with the Unno–Rachkovsky Stokes spectra.
 
-    Per column (ny, nx) float64 inputs: ``vshift`` Doppler shift and
+    Per column (npix,) float64 inputs: ``vshift`` Doppler shift and
     ``vzeeman`` Zeeman splitting in Doppler widths, ``cosg`` = cosγ (field to
     line of sight), ``qfac`` = sin²γ cos2χ, ``ufac`` = sin²γ sin2χ, ``bmu`` = βμ,
-    ``scale`` = continuum / (1 + βμ).  ``vgrid`` = (λ - λ0)/Δλ_D.
+    ``scale`` = continuum / (1 + βμ).  ``vgrid`` = (λ - λ0)/Δλ_D.  The loop runs
+    in parallel over columns, so a (1, N) strip of a full-disk scene is as
+    fast as an N-column square.
     """
-    ny, nx = vshift.shape
+    npix = vshift.size
     nl = vgrid.size
-    for iy in nb.prange(ny):
-        for ix in range(nx):
-            vs = vshift[iy, ix]
-            vb = vzeeman[iy, ix]
-            c = cosg[iy, ix]
-            fq = qfac[iy, ix]
-            fu = ufac[iy, ix]
-            b = bmu[iy, ix]
-            s = scale[iy, ix]
-            sin2 = 1.0 - c * c
-            cos2p1 = 1.0 + c * c
-            for j in range(nl):
-                v = vgrid[j] - vs
-                hp, fp = voigt_lookup(v, damping, tab_re, tab_im)
-                if vb != 0.0:
-                    hb, fb = voigt_lookup(v + vb, damping, tab_re, tab_im)
-                    hr, fr = voigt_lookup(v - vb, damping, tab_re, tab_im)
-                else:
-                    hb, fb, hr, fr = hp, fp, hp, fp
-                hs = 0.5 * (hb + hr)
-                fs = 0.5 * (fb + fr)
-                ei = 0.5 * eta0 * (hp * sin2 + hs * cos2p1)
-                eq = 0.5 * eta0 * (hp - hs) * fq
-                eu = 0.5 * eta0 * (hp - hs) * fu
-                ev = 0.5 * eta0 * (hr - hb) * c
-                rq = 0.5 * eta0 * (fp - fs) * fq
-                ru = 0.5 * eta0 * (fp - fs) * fu
-                rv = 0.5 * eta0 * (fr - fb) * c
-                k = 1.0 + ei
-                k2 = k * k
-                r2 = rq * rq + ru * ru + rv * rv
-                pi_ = eq * rq + eu * ru + ev * rv
-                delta = k2 * (k2 - eq * eq - eu * eu - ev * ev + r2) - pi_ * pi_
-                f = b / delta
-                out_i[iy, ix, j] = s * (1.0 + f * k * (k2 + r2))
-                out_q[iy, ix, j] = -s * f * (k2 * eq + k * (ev * ru - eu * rv) + rq * pi_)
-                out_u[iy, ix, j] = -s * f * (k2 * eu + k * (eq * rv - ev * rq) + ru * pi_)
-                out_v[iy, ix, j] = -s * f * (k2 * ev + k * (eu * rq - eq * ru) + rv * pi_)
+    for p in nb.prange(npix):
+        vs = vshift[p]
+        vb = vzeeman[p]
+        c = cosg[p]
+        fq = qfac[p]
+        fu = ufac[p]
+        b = bmu[p]
+        s = scale[p]
+        sin2 = 1.0 - c * c
+        cos2p1 = 1.0 + c * c
+        for j in range(nl):
+            v = vgrid[j] - vs
+            hp, fp = voigt_lookup(v, damping, tab_re, tab_im)
+            if vb != 0.0:
+                hb, fb = voigt_lookup(v + vb, damping, tab_re, tab_im)
+                hr, fr = voigt_lookup(v - vb, damping, tab_re, tab_im)
+            else:
+                hb, fb, hr, fr = hp, fp, hp, fp
+            hs = 0.5 * (hb + hr)
+            fs = 0.5 * (fb + fr)
+            ei = 0.5 * eta0 * (hp * sin2 + hs * cos2p1)
+            eq = 0.5 * eta0 * (hp - hs) * fq
+            eu = 0.5 * eta0 * (hp - hs) * fu
+            ev = 0.5 * eta0 * (hr - hb) * c
+            rq = 0.5 * eta0 * (fp - fs) * fq
+            ru = 0.5 * eta0 * (fp - fs) * fu
+            rv = 0.5 * eta0 * (fr - fb) * c
+            k = 1.0 + ei
+            k2 = k * k
+            r2 = rq * rq + ru * ru + rv * rv
+            pi_ = eq * rq + eu * ru + ev * rv
+            delta = k2 * (k2 - eq * eq - eu * eu - ev * ev + r2) - pi_ * pi_
+            f = b / delta
+            out_i[p, j] = s * (1.0 + f * k * (k2 + r2))
+            out_q[p, j] = -s * f * (k2 * eq + k * (ev * ru - eu * rv) + rq * pi_)
+            out_u[p, j] = -s * f * (k2 * eu + k * (eq * rv - ev * rq) + ru * pi_)
+            out_v[p, j] = -s * f * (k2 * ev + k * (eu * rq - eq * ru) + rv * pi_)

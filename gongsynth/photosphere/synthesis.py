@@ -209,8 +209,10 @@ def synthesize(photosphere, mu=1.0, wavelength=None, *, los_azimuth=-90 * u.deg,
     eta0, damping = float(line.line_strength), float(line.damping)
     if method == "numba":
         tab_re, tab_im = voigt_table(damping)
-        me_kernel(vgrid, cols["vshift"], cols["vzeeman"], cols["cosg"], cols["qfac"], cols["ufac"],
-                  cols["bmu"], cols["scale"], eta0, damping, tab_re, tab_im, *out)
+        flat = {k: v.reshape(-1) for k, v in cols.items()}
+        me_kernel(vgrid, flat["vshift"], flat["vzeeman"], flat["cosg"], flat["qfac"], flat["ufac"],
+                  flat["bmu"], flat["scale"], eta0, damping, tab_re, tab_im,
+                  *(a.reshape(ny * nx, vgrid.size) for a in out))
     else:
         step = max(1, 1_000_000 // max(1, nx * vgrid.size))
         for start in range(0, ny, step):
