@@ -42,6 +42,7 @@ from .instrument import GONGInstrument
 from .observations import BadHeaderWarning, load_observation
 from .statistics import _disk_values, _histogram  # one disk mask for both histograms
 from .statistics import (
+    LimbDarkeningProfile,
     disk_centre_level,
     field_histogram,
     limb_darkening,
@@ -63,6 +64,8 @@ __all__ = [
     "summarize_map",
     "compare",
     "compare_files",
+    "LimbDarkeningComparison",
+    "compare_limb_darkening",
 ]
 
 #: Maps with pixels finer than this fraction of GONG's plate scale are
@@ -378,7 +381,9 @@ def summarize_map(smap, label, *, instrument=None, degrade="auto", noise_box=60 
         ``"auto"``: apply `degrade_to_gong` when the pixels are finer than
         ``AUTO_DEGRADE_FRACTION`` × GONG's plate scale.
     noise_box : `~astropy.units.Quantity`
-        Box side for `noise_estimate`.
+        Box side for `noise_estimate`: the 7 x 7 grid within 0.35 R☉ of disk
+        centre, or, if none of its boxes lies on the map (a field far from disk
+        centre), boxes tiling the map on the disk (``noise.layout == "tiles"``).
     max_radius : float
         Outer radius (solar radii) of the histogram region.
 
@@ -410,9 +415,19 @@ def summarize_map(smap, label, *, instrument=None, degrade="auto", noise_box=60 
         degraded=bool(degrade),
         histogram=_histogram(values, u.G, None, False),
         abs_histogram=_histogram(values, u.G, None, True),
-        noise=noise_estimate(smap, box=noise_box),
+        noise=_noise(smap, noise_box),
         map=smap,
     )
+
+
+def _noise(smap, box):
+    """Quiet-box noise near disk centre; on a field away from disk centre, boxes anywhere on the disk."""
+    try:
+        return noise_estimate(smap, box=box)
+    except ValueError:
+        # No grid box near disk centre lies on this map (e.g. a field at high latitude):
+        # tile the map instead; NoiseEstimate.layout records it.
+        return noise_estimate(smap, box=box, layout="tiles", max_radius=1.0)
 
 
 def _cdf_distance(h1, h2):
@@ -683,3 +698,112 @@ def compare_files(sim_path, obs_path, *, out=None, overwrite=False, instrument=N
                 os.unlink(tmp)
             raise
     return report
+
+
+@dataclass
+class LimbDarkeningComparison:
+    """
+    Result of `compare_limb_darkening`: two centre-to-limb profiles and their difference.
+
+    Attributes
+    ----------
+    sim, obs : `~gongsynth.statistics.LimbDarkeningProfile`
+        Profiles normalised to each map's own disk-centre level, on the same μ bins.
+    max_difference, rms_difference : float
+        Largest and rms |I_sim/I_sim(0) - I_obs/I_obs(0)| over the μ bins both maps fill.
+    centre_ratio : float
+        Ratio of the disk-centre levels, sim / obs (meaningful when both are in
+        the same unit, e.g. DN of the same exposure).
+    figure : `matplotlib.figure.Figure` or None
+    """
+
+    sim: LimbDarkeningProfile
+    obs: LimbDarkeningProfile
+    max_difference: float
+    rms_difference: float
+    centre_ratio: float
+    figure: object = None
+
+
+def compare_limb_darkening(sim_map, obs_map, *, instrument=None, degrade="auto", bins=20, max_radius=0.98,
+                           labels=("simulated", "observed"), plot=True, fig=None):
+    """
+    Compare the count levels of two intensity maps: limb-darkening curves normalised to disk centre.
+
+    Maps finer than ``AUTO_DEGRADE_FRACTION`` × GONG's pixels are first
+    degraded to GONG (``degrade="auto"``), so the limb is blurred alike.
+
+    Parameters
+    ----------
+    sim_map, obs_map : `~sunpy.map.GenericMap`
+        Intensity maps (pseudo-continuum, continuum; any unit).
+    instrument : `~gongsynth.GONGInstrument`, optional
+    degrade : {"auto", True, False}
+    bins : int
+        Number of μ bins.
+    max_radius : float
+        Outermost distance from disk centre used, solar radii.
+    labels : (str, str)
+    plot : bool
+        Draw the two curves and their difference.
+    fig : `matplotlib.figure.Figure`, optional
+
+    Returns
+    -------
+    `LimbDarkeningComparison`
+
+    Examples
+    --------
+    >>> import numpy as np, astropy.units as u, sunpy.map
+    >>> from astropy.coordinates import SkyCoord
+    >>> from sunpy.coordinates import frames
+    >>> from gongsynth.statistics import disk_coordinates
+    >>> ref = SkyCoord(0 * u.arcsec, 0 * u.arcsec, frame=frames.Helioprojective,
+    ...                observer="earth", obstime="2020-01-01")
+    >>> hdr = sunpy.map.make_fitswcs_header((200, 200), ref, scale=[10, 10] * u.arcsec / u.pix)
+    >>> _, mu = disk_coordinates(sunpy.map.Map(np.zeros((200, 200)), hdr))
+    >>> a = sunpy.map.Map(np.nan_to_num(1 - 0.6 * (1 - mu)), hdr)
+    >>> b = sunpy.map.Map(np.nan_to_num(2 * (1 - 0.5 * (1 - mu))), hdr)
+    >>> result = compare_limb_darkening(a, b, plot=False)
+    >>> round(result.centre_ratio, 2), round(result.max_difference, 2)
+    (0.5, 0.08)
+    """
+    if len(labels) != 2:
+        raise ValueError(f"labels must be two strings, got {labels!r}")
+    if degrade not in ("auto", True, False):
+        raise ValueError(f"degrade must be 'auto', True or False, got {degrade!r}")
+    inst = _instrument(instrument)
+    profiles = []
+    for smap, name in ((sim_map, "sim_map"), (obs_map, "obs_map")):
+        _check_map(smap, name)
+        if degrade is True or (degrade == "auto"
+                               and local_pixel_scale(smap) < AUTO_DEGRADE_FRACTION * inst.plate_scale):
+            smap = degrade_to_gong(smap, inst)
+        profiles.append(limb_darkening(smap, bins=bins, max_radius=max_radius))
+    sim, obs = profiles
+    both = (sim.counts > 0) & (obs.counts > 0)
+    diff = np.abs(sim.intensity[both] - obs.intensity[both])
+    ratio = sim.centre_level / obs.centre_level
+    result = LimbDarkeningComparison(
+        sim=sim, obs=obs, max_difference=float(diff.max()),
+        rms_difference=float(np.sqrt(np.mean(diff**2))),
+        centre_ratio=float(ratio.to_value(u.one)) if ratio.unit.is_equivalent(u.one) else float("nan"),
+    )
+    if plot:
+        if fig is None:
+            from matplotlib.figure import Figure
+
+            fig = Figure(figsize=(7, 6))
+        top, bottom = fig.subplots(2, 1, sharex=True, height_ratios=[3, 1])
+        for profile, label, colour in ((sim, labels[0], "C0"), (obs, labels[1], "C3")):
+            top.plot(profile.mu, profile.intensity, "o", ms=3, color=colour,
+                     label=f"{label}: centre {profile.centre_level:.4g}")
+            top.plot(profile.mu, profile.law(profile.mu), "-", lw=0.8, color=colour)
+        top.set_ylabel("I(μ) / I(disk centre)")
+        top.legend(fontsize=8)
+        bottom.plot(sim.mu[both], sim.intensity[both] - obs.intensity[both], "ko", ms=3)
+        bottom.axhline(0, color="0.5", lw=0.8)
+        bottom.set_xlabel("μ = cos θ")
+        bottom.set_ylabel("difference")
+        result.figure = fig
+    return result

@@ -14,6 +14,7 @@ from gongsynth.compare import (
     ComparisonReport,
     compare,
     compare_files,
+    compare_limb_darkening,
     degrade_to_gong,
     load_observation,
     noise_estimate,
@@ -332,3 +333,60 @@ def test_compare_files_refuses_continuum(tmp_path):
     sim = write_gong_fits(tmp_path / "sim.fits", np.zeros((860, 860)))
     with pytest.raises(ObservationKindError, match="not a magnetogram"):
         compare_files(sim, real_file(MDI_IC))
+
+
+# ----------------------------------------------------------------------------- count levels
+
+
+def test_compare_limb_darkening_of_two_laws():
+    m = hpc_map(np.zeros((300, 300)), 7.0)
+    _, mu = disk_coordinates(m)
+    laws = [(0.47, 0.23, 500.0), (0.55, 0.10, 2000.0)]
+    maps = [hpc_map(np.nan_to_num(level * (1 - a * (1 - mu) - b * (1 - mu) ** 2)), 7.0)
+            for a, b, level in laws]
+    result = compare_limb_darkening(*maps, labels=("A", "B"))
+    assert result.centre_ratio == pytest.approx(0.25, rel=1e-3)
+    x = 1 - result.sim.mu
+    expected = np.abs((laws[0][0] - laws[1][0]) * x + (laws[0][1] - laws[1][1]) * x**2)
+    assert result.max_difference == pytest.approx(expected.max(), abs=2e-3)
+    assert result.sim.coefficients == pytest.approx(laws[0][:2], abs=2e-3)
+    assert result.obs.coefficients == pytest.approx(laws[1][:2], abs=2e-3)
+    assert len(result.figure.axes) == 2
+
+
+def test_real_mdi_continuum_limb_darkening_survives_degradation():
+    ic = load_observation(real_file(MDI_IC), kind="continuum")
+    result = compare_limb_darkening(ic, degrade_to_gong(ic), degrade=False, plot=False)
+    # The PSF moves light only near the limb: profiles agree to < 1 % inside mu = 0.3.
+    inner = result.sim.mu > 0.3
+    assert np.max(np.abs(result.sim.intensity[inner] - result.obs.intensity[inner])) < 0.01
+    assert result.centre_ratio == pytest.approx(1, abs=0.005)
+    with pytest.raises(ValueError, match="degrade"):
+        compare_limb_darkening(ic, ic, degrade="maybe")
+
+
+# ----------------------------------------------------------------------------- gongsynth products
+
+
+def test_gongsynth_product_file_compared_off_disk_centre(tmp_path):
+    maps = pytest.importorskip("gongsynth.maps")
+    rng = np.random.default_rng(12)
+    # A 120 x 120 field (300") at 60 degrees latitude: no quiet box near disk centre lies on it.
+    centre = maps.field_centre(60 * u.deg, "2020-06-06T06:30")
+    sim = maps.make_product_map(rng.normal(0, 3, (120, 120)) * u.G, centre=centre, scale=2.5 * u.arcsec,
+                                product="magnetogram")
+    path = tmp_path / "sim_magnetogram.fits"
+    sim.save(path)
+    loaded = load_observation(path)
+    assert type(loaded).__name__ == "GONGSynthMap" and loaded.unit == u.G
+    with pytest.raises(ValueError, match="no 24x24-pixel box"):
+        noise_estimate(loaded)
+    report = compare(loaded, loaded, plot=False)
+    assert report.sim.noise.layout == "tiles"
+    assert report.sim.noise.median_std.to_value(u.G) == pytest.approx(3.0, rel=0.05)
+    cont = maps.make_product_map(np.ones((40, 40)) * u.adu, centre=centre, scale=2.5 * u.arcsec,
+                                 product="continuum")
+    cont_path = tmp_path / "sim_continuum.fits"
+    cont.save(cont_path)
+    with pytest.raises(ObservationKindError, match="PSEUDO-CONTINUUM"):
+        load_observation(cont_path)
