@@ -350,7 +350,9 @@ def integrate(expected, *, duration=10 * u.min, engine="blocks", seed=None, inst
     scale = 2.0**bits
     dither_sum = schedule.dither_sum
     data = (sums >> bits).astype(np.float64)
-    data += (scale - 1) / (2 * scale) - (dither_sum / scale)[:, None, None]
+    # A plane without frames (runs shorter than 2 LCVR states) holds an exact 0.
+    centring = np.where(schedule.frames_per_plane > 0, (scale - 1) / (2 * scale), 0.0)
+    data += (centring - dither_sum / scale)[:, None, None]
     header = _header(schedule, engine, root, flat_source, dark_source, n_snap, inst)
     return RawPlanes(data=data, frames_per_plane=schedule.frames_per_plane, header=header,
                      flat=flat, dark=dark)
@@ -398,7 +400,7 @@ def _run_blocks(values, flat, dark, schedule, snap, gain, sigma, root, chunk_row
     counts = np.zeros((n_snap, N_PLANES), dtype=np.float64)
     np.add.at(counts, (snap, schedule.plane), 1)
     frames = schedule.frames_per_plane.astype(np.float64)
-    spread = np.sqrt(frames * sigma**2 + (frames - 1) / 12.0)[:, None]
+    spread = np.sqrt(frames * sigma**2 + np.maximum(frames - 1, 0) / 12.0)[:, None]
     offset = schedule.dither_sum[:, None]
     sums = np.empty((N_PLANES, ny, nx), dtype=np.int64)
 
