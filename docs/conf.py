@@ -43,6 +43,7 @@ extensions = [
     "sphinx_gallery.gen_gallery",
     "gongsynth_params",
     "gongsynth_cli",
+    "gongsynth_validation",
 ]
 # MathJax served from the built site itself, so equations render offline; without
 # the package the pages fall back to MathJax from its CDN (renders when online).
@@ -146,8 +147,8 @@ ogp_social_cards = {"enable": False}
 # -- Docstring conventions --------------------------------------------------------
 # gongsynth docstrings write magnitudes as |B| or |true B|, readable in a
 # terminal.  In RST |...| is a substitution reference (an error under -W), so
-# escape such pairs in prose, leaving code (`...`), doctests, literal blocks
-# and tables alone.
+# escape such pairs in prose (docstrings and gallery text), leaving code
+# (`...`), doctests, literal blocks, directive bodies and tables alone.
 _BARS = re.compile(r"(?<![\\|])\|(?=[^\s|])([^|`\n]*?[^\s|\\])\|(?!\|)")
 
 
@@ -161,14 +162,23 @@ def _escape_magnitude_bars(app, what, name, obj, options, lines):
                 literal_indent = None
             else:
                 continue
-        if stripped.endswith("::"):
-            literal_indent = indent
+        if stripped.endswith("::") or (stripped.startswith(".. ") and "::" in stripped):
+            literal_indent = indent  # literal block or directive body: leave it alone
+            continue
         # doctests, line blocks ("| text") and grid tables stay as they are
         if not stripped or stripped == "|" or stripped.startswith((">>>", "...", "| ", "+-", "+=")):
             continue
         parts = line.split("`")
         parts[::2] = [_BARS.sub(r"\\|\1\\|", part) for part in parts[::2]]
         lines[i] = "`".join(parts)
+
+
+def _escape_gallery_bars(app, docname, source):
+    """The same for the prose of gallery examples (their generated RST pages)."""
+    if docname.startswith("generated/gallery/"):
+        lines = source[0].split("\n")
+        _escape_magnitude_bars(app, "gallery", docname, None, None, lines)
+        source[0] = "\n".join(lines)
 
 
 # -- Roles used by third-party docstrings we inherit ----------------------------
@@ -191,3 +201,4 @@ def setup(app):
 
     app.add_domain(CitationAsText)
     app.connect("autodoc-process-docstring", _escape_magnitude_bars)
+    app.connect("source-read", _escape_gallery_bars)
