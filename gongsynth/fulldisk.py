@@ -315,7 +315,9 @@ def full_disk_scene(source, *, obstime=None, instrument=None, detector_shape=Non
             f"{outside} on-disk samples have mu outside the cubes' range [{engine.mu[0]:.3g}, "
             f"{engine.mu[-1]:.3g}]: they use the nearest cube (no extrapolation)", stacklevel=2)
     from .polarimetry import CHANNEL_UNIT
-    data = radiance_at_earth(u.Quantity(light, CHANNEL_UNIT, copy=False))
+    # In place: the scene is large.
+    light *= radiance_at_earth(1 * CHANNEL_UNIT).value
+    data = u.Quantity(light, radiance_at_earth(1 * CHANNEL_UNIT).unit, copy=False)
     time = _obstime(obstime)
     from sunpy.coordinates import Helioprojective, get_earth
     centre = SkyCoord(0 * u.arcsec, 0 * u.arcsec,

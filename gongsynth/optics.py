@@ -318,10 +318,24 @@ def convolve(stack, kernel, *, boundary="periodic", workers=None):
     >>> float(out.sum()), float(out[3, 3])
     (1.0, 0.1111111111111111)
     """
-    if boundary not in BOUNDARIES:
-        raise ValueError(f"boundary must be one of {BOUNDARIES}, got {boundary!r}")
     values, unit = _split_unit(stack, "stack")
     values = _check_stack(values, "stack")
+    out = np.empty_like(values)
+    result = out.reshape((-1,) + values.shape[-2:])
+    for i, conv in enumerate(_convolved_planes(values, kernel, boundary, workers)):
+        result[i] = conv
+    return _with_unit(out, unit)
+
+
+def _convolved_planes(values, kernel, boundary, workers):
+    """
+    Yield each plane of ``values`` (..., ny, nx) convolved with ``kernel``.
+
+    The yielded arrays are views into a work buffer that the next plane
+    overwrites: one plane's FFT temporaries at a time, whatever the stack.
+    """
+    if boundary not in BOUNDARIES:
+        raise ValueError(f"boundary must be one of {BOUNDARIES}, got {boundary!r}")
     k = normalize_kernel(kernel, "kernel")
     ny, nx = values.shape[-2:]
     ky, kx = k.shape
@@ -334,21 +348,23 @@ def convolve(stack, kernel, *, boundary="periodic", workers=None):
         fshape = (scipy.fft.next_fast_len(ny + ky - 1, real=True),
                   scipy.fft.next_fast_len(nx + kx - 1, real=True))
     kfft = scipy.fft.rfft2(_wrapped_kernel(k, fshape, values.dtype), workers=workers)
-    out = np.empty_like(values)
-    planes = values.reshape((-1, ny, nx))
-    result = out.reshape((-1, ny, nx))
     mode = "constant" if boundary == "zero" else "symmetric"
-    for i, plane in enumerate(planes):
-        if boundary != "periodic":
+    buffer = np.zeros(fshape, dtype=values.dtype)
+    for plane in values.reshape((-1, ny, nx)):
+        if boundary == "periodic":
+            buffer[...] = plane
+        else:
+            # Zero beyond the padded field (the kernel never reaches it from the field).
             padded = np.pad(plane, pads, mode=mode)
-            extra = ((0, fshape[0] - padded.shape[0]), (0, fshape[1] - padded.shape[1]))
-            plane = np.pad(padded, extra, mode="constant")
-        conv = scipy.fft.irfft2(scipy.fft.rfft2(plane, workers=workers) * kfft, s=fshape,
-                                workers=workers)
+            buffer[:padded.shape[0], :padded.shape[1]] = padded
+            del padded
+        spectrum = scipy.fft.rfft2(buffer, workers=workers)
+        spectrum *= kfft
+        conv = scipy.fft.irfft2(spectrum, s=fshape, workers=workers)
+        del spectrum
         # With pads (p, q): field pixel j sits at padded index j + p, and the
         # circular convolution with the centred kernel keeps it there.
-        result[i] = conv[pads[0][0]:pads[0][0] + ny, pads[1][0]:pads[1][0] + nx]
-    return _with_unit(out, unit)
+        yield conv[pads[0][0]:pads[0][0] + ny, pads[1][0]:pads[1][0] + nx]
 
 
 @functools.lru_cache(maxsize=32)
@@ -517,10 +533,16 @@ def observe(stack, pixel_scale: u.arcsec, *, instrument=None, psf=None, boundary
     """
     inst = _instrument(instrument)
     kernel = _resolve_kernel(psf, pixel_scale.to_value(u.arcsec), inst)
-    if kernel is not None:
-        stack = convolve(stack, kernel, boundary=boundary, workers=workers)
-    return pixelize(stack, pixel_scale, instrument=inst, periodic=boundary == "periodic",
-                    method=method)
+    periodic = boundary == "periodic"
+    if kernel is None:
+        return pixelize(stack, pixel_scale, instrument=inst, periodic=periodic, method=method)
+    values, unit = _split_unit(stack, "stack")
+    values = _check_stack(values, "stack")
+    # Plane by plane: PSF then pixelization, so no convolved copy of the stack is held.
+    planes = [pixelize(conv, pixel_scale, instrument=inst, periodic=periodic, method=method)
+              for conv in _convolved_planes(values, kernel, boundary, workers)]
+    out = np.stack(planes).reshape(values.shape[:-2] + planes[0].shape)
+    return _with_unit(out, unit)
 
 
 def photometric_factor(instrument=None):

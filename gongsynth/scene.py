@@ -481,7 +481,9 @@ def _tile_stack(values, pixel_km, shape, scale, km_per_arcsec, mu, regions):
         opy = _footprint_operator(ny / 2 + y_sky[rows] * per_px_y, scale * per_px_y, ny)
         opx = _footprint_operator(nx / 2 + x_sky[cols] * per_px_x, scale * per_px_x, nx)
         for i in range(k):
-            out[i, rows, cols] = (opx @ (opy @ values[i]).T).T
+            # Small side first, and the big product lands in C order (no transposed writes).
+            narrow = np.ascontiguousarray((opx @ values[i].T).T)  # (ny, NXq)
+            out[i, rows, cols] = opy @ narrow
     return out
 
 
@@ -611,7 +613,8 @@ def tiled_scenes(channels, blos, pixel_size: u.km, *, latitude: u.deg = 0 * u.de
             raise ValueError(f"blos must have shape {channels.shape[1:]} like channels, got {blos.shape}")
     kwargs = dict(latitude=lat * u.deg, resolutions=resolutions, obstime=obstime, instrument=inst,
                   detector_shape=detector_shape, shape=shape)
-    data = radiance_at_earth(tile(channels, pixel_size, **kwargs))
+    # Tiling is linear: convert the small tile to radiance at Earth, not the big scene.
+    data = tile(radiance_at_earth(channels), pixel_size, **kwargs)
     mu, los_azimuth = viewing_geometry(lat * u.deg, obstime)
     grid, scale, det = sky_grid(inst, detector_shape=detector_shape, shape=shape)
     centre, km_per_arcsec = field_centre(lat * u.deg, obstime)
