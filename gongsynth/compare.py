@@ -155,18 +155,16 @@ def _kernel(psf, scale, inst, native_fwhm):
 def _masked_convolve(data, kernel):
     """Normalised convolution: the kernel-weighted mean of the finite pixels around each pixel."""
     valid = np.isfinite(data)
+    # Kernel centre at (ky // 2, kx // 2), as gongsynth.optics samples it: pad even sides at
+    # the end so that the centre is the middle sample, which mode="same" keeps in place.
     ky, kx = kernel.shape
-    ny, nx = data.shape
-    out = []
-    for plane in (np.where(valid, data, 0.0), valid.astype(np.float64)):
-        full = scipy.signal.oaconvolve(plane, kernel, mode="full")
-        # Kernel centre at (ky // 2, kx // 2), as gongsynth.optics samples it.
-        out.append(full[ky // 2:ky // 2 + ny, kx // 2:kx // 2 + nx])
-    num, den = out
+    kernel = np.pad(kernel, ((0, 1 - ky % 2), (0, 1 - kx % 2)))
+    num = scipy.signal.fftconvolve(np.where(valid, data, 0.0), kernel, mode="same")
+    den = scipy.signal.fftconvolve(valid.astype(np.float64), kernel, mode="same")
     with np.errstate(invalid="ignore", divide="ignore"):
-        result = num / den
-    result[~valid | (den < 1e-6)] = np.nan
-    return result
+        num /= den
+    num[~valid | (den < 1e-6)] = np.nan
+    return num
 
 
 def _overlap_operator(n_in, cdelt_in, crpix0_in, scale_out):
@@ -175,16 +173,17 @@ def _overlap_operator(n_in, cdelt_in, crpix0_in, scale_out):
 
     Input pixel j covers [(j - 0.5 - crpix0) cdelt, (j + 0.5 - crpix0) cdelt]
     in the projection plane (arcsec from the reference point).  Output pixels
-    of side ``scale_out`` start at the low edge of the input field and cover
-    it (the last one possibly in part).  Entry (k, j) is the fraction of
-    output pixel k covered by input pixel j, so rows sum to the covered
-    fraction.  Returns the operator and the 0-based (fractional) output pixel
-    coordinate of the reference point.
+    of side ``scale_out`` have their edges at whole multiples of ``scale_out``
+    from the reference point (a grid fixed on the sky, whatever the input's
+    extent or padding) and cover the input field, the outer ones possibly in
+    part.  Entry (k, j) is the fraction of output pixel k covered by input
+    pixel j, so rows sum to the covered fraction.  Returns the operator and
+    the 0-based output pixel coordinate of the reference point.
     """
     a = (np.arange(n_in) - 0.5 - crpix0_in) * cdelt_in
     b = a + cdelt_in
     lo, hi = np.minimum(a, b), np.maximum(a, b)
-    origin = lo.min()
+    origin = math.floor(lo.min() / scale_out + 1e-9) * scale_out
     n_out = max(1, int(math.ceil((hi.max() - origin) / scale_out - 1e-9)))
     rows, cols, vals = [], [], []
     first = np.floor((lo - origin) / scale_out + 1e-12).astype(int)
@@ -214,9 +213,9 @@ def degrade_to_gong(smap, instrument=None, *, psf=None, native_fwhm=None, min_co
     the kernel, so off-disk blanks do not bleed in); (3) bin onto
     ``instrument.plate_scale`` pixels by exact area weighting (flux
     conserving: the mean over each GONG pixel of what falls in it).  The
-    output grid starts at the lower-left corner of the input field and shares
-    its tangent point (``CRVAL``), so the WCS is exact (CRPIX is in general
-    fractional, as in real GONG files).  The observer is the observation's
+    output grid shares the input's tangent point (``CRVAL``) and has its pixel
+    edges at whole multiples of the plate scale from it, so the same sky gives
+    the same grid whatever the input's extent, and the WCS is exact.  The observer is the observation's
     own (SOHO for MDI, SDO for HMI).
 
     Parameters

@@ -173,6 +173,18 @@ def test_rotated_map_is_aligned_with_solar_north():
     g = degrade_to_gong(flipped, psf=False)
     assert np.allclose(g.rotation_matrix, np.eye(2))
     assert world_centroid(g) == pytest.approx(target, abs=0.05)
+    # Same grid on the sky as from the upright map (rotation pads the array: shifted by
+    # whole pixels), and the same values there.
+    g_up = degrade_to_gong(upright, psf=False)
+    shift = np.array([g.reference_pixel.x.value - g_up.reference_pixel.x.value,
+                      g.reference_pixel.y.value - g_up.reference_pixel.y.value])
+    assert shift == pytest.approx(np.round(shift), abs=1e-9)
+    dx, dy = np.round(shift).astype(int)
+    ny, nx = g_up.data.shape
+    common = g.data[dy:dy + ny, dx:dx + nx]
+    ok = np.isfinite(common) & np.isfinite(g_up.data)
+    assert ok.mean() > 0.95
+    assert np.max(np.abs(common[ok] - g_up.data[ok])) < 1e-6
 
 
 def test_degrade_bad_input():
@@ -212,12 +224,20 @@ def test_real_mdi_degraded_to_gong(mdi, mdi_gong):
     g = mdi_gong
     assert g.scale.axis1 == 2.5 * u.arcsec / u.pix
     assert g.unit == u.G
-    # Disk centre keeps its world position; the field of view is kept.
-    x, y = g.wcs.world_to_pixel(SkyCoord(0 * u.arcsec, 0 * u.arcsec, frame=g.coordinate_frame))
-    xm, ym = mdi.wcs.world_to_pixel(SkyCoord(0 * u.arcsec, 0 * u.arcsec, frame=mdi.coordinate_frame))
-    assert float(x) == pytest.approx((float(xm) + 0.5) * mdi.scale.axis1.value / 2.5 - 0.5, abs=1e-6)
-    assert float(y) == pytest.approx((float(ym) + 0.5) * mdi.scale.axis2.value / 2.5 - 0.5, abs=1e-6)
-    assert g.data.shape == (math.ceil(1024 * 1.98600817 / 2.5 - 1e-9),) * 2
+    # Same tangent point (disk centre); GONG pixel edges at whole multiples of 2.5" from it.
+    assert g.reference_coordinate.Tx == mdi.reference_coordinate.Tx == 0 * u.arcsec
+    ref = g.reference_pixel
+    for value in (ref.x.value, ref.y.value):
+        assert value + 0.5 == pytest.approx(round(value + 0.5), abs=1e-9)
+    # The GONG grid covers MDI's field of view (1024 x 1.986") by less than one extra pixel.
+    for axis, (n_in, ref_in, ref_out) in enumerate(((1024, mdi.reference_pixel.x.value, ref.x.value),
+                                                    (1024, mdi.reference_pixel.y.value, ref.y.value))):
+        low_in = (-0.5 - ref_in) * 1.98600817
+        high_in = (n_in - 0.5 - ref_in) * 1.98600817
+        low_out = (-0.5 - ref_out) * 2.5
+        high_out = (g.data.shape[1 - axis] - 0.5 - ref_out) * 2.5
+        assert low_out <= low_in < low_out + 2.5
+        assert high_out - 2.5 < high_in <= high_out
     # The total signed flux over the disk is conserved (off-limb pixels are NaN).
     rho_m, _ = disk_coordinates(mdi)
     rho_g, _ = disk_coordinates(g)
