@@ -203,7 +203,7 @@ def _fit(truth, measured, rng, n_boot):
 
 @u.quantity_input
 def calibration_curve(measured, truth=None, *, mask=None, threshold: u.G = 100 * u.G,
-                      bins=41, limit: u.G = None, n_boot=100, seed=0, label=""):
+                      bins=41, limit: u.G = None, n_boot=100, seed=0, label="", psf=True):
     """
     Measured vs true flux density, binned and fitted.
 
@@ -228,6 +228,10 @@ def calibration_curve(measured, truth=None, *, mask=None, threshold: u.G = 100 *
         Seed of the bootstrap.
     label : str
         Title for plots.
+    psf : bool
+        When ``measured`` is a result: compare with the truth seen through the
+        instrument PSF (``result.truth_psf``, the default: what a perfect GONG
+        would measure) or only averaged over the pixel (``result.truth``).
 
     Returns
     -------
@@ -247,7 +251,10 @@ def calibration_curve(measured, truth=None, *, mask=None, threshold: u.G = 100 *
         if not hasattr(measured, "truth"):
             raise TypeError("truth is required unless measured is a SimulationResult")
         result = measured
-        measured, truth = result.magnetogram, result.truth
+        measured = result.magnetogram
+        truth = result.truth_psf if psf else result.truth
+        if truth is None:
+            raise ValueError("this result has no ground truth (its input cube had no blos)")
         gong_resolution = getattr(result, "resolution_map", None)
         if gong_resolution is not None:
             select = np.asarray(gong_resolution) == 1

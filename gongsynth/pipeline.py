@@ -13,7 +13,7 @@ import numpy as np
 
 from . import __version__
 from .config import SimulationConfig
-from .maps import field_centre, make_product_map
+from .maps import make_product_map
 from .reduction import reduce
 from .seeding import child_sequence
 
@@ -240,7 +240,7 @@ def _run(config, *, stokes, flat, dark, progress):
     observed = reduce(raw, inst)
     lap("reduction")
 
-    centre = field_centre(config.latitude if config.mode == "tiled" else 0 * u.deg, config.obstime)
+    centre = light.centre
     extra = _run_header(config)
     products = dict(
         magnetogram=make_product_map(observed.magnetogram, centre=centre, scale=inst.plate_scale,
