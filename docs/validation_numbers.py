@@ -272,6 +272,66 @@ def _mdi_noise():
     return f"quietest 60″ box: std {noise.std.to_value(u.G):.1f} G, robust σ {noise.sigma.to_value(u.G):.1f} G"
 
 
+def _schedule():
+    from gongsynth.schedule import dither_sequence, frame_schedule
+
+    schedule = frame_schedule(10 * u.min)
+    d = dither_sequence(3600)
+    return (f"{schedule.frames_per_plane.tolist()[0]} frames per plane in 10 min; dither "
+            f"{d.min()}…{d.max()} ADU, mean {schedule.dither.mean().to_value(u.adu):.1f} ADU/frame")
+
+
+def _quiet_sun_expected(shape, field=0 * u.G, velocity=0 * u.m / u.s):
+    """Expected electrons per frame of a uniform disk-centre quiet Sun, (6, ny, nx)."""
+    from gongsynth.optics import photometric_factor
+    from gongsynth.scene import radiance_at_earth
+
+    continuum = 3.0e14 * u.Unit("erg / (s cm2 sr cm)")  # design §3.10
+    planes = _planes(field, velocity)[:, 0] * u.nm * continuum
+    electrons = (radiance_at_earth(planes) * photometric_factor()).to(u.electron)
+    return electrons[:, None, None] * np.ones(shape)
+
+
+def _noise():
+    from gongsynth.camera import integrate
+
+    expected = _quiet_sun_expected((100, 100))
+    parts = []
+    for minutes in (1, 10):
+        observed = reduce(integrate(expected, duration=minutes * u.min, seed=minutes, progress=False))
+        parts.append((observed.magnetogram.std().to_value(u.G),
+                      observed.doppler.std().to_value(u.m / u.s)))
+    (b1, v1), (b10, v10) = parts
+    return (f"1 min: {b1:.2f} G, {v1:.1f} m/s; 10 min: {b10:.2f} G, {v10:.1f} m/s "
+            f"(ratio {b1 / b10:.2f}, √10 = 3.16)")
+
+
+def _engines():
+    from gongsynth.camera import integrate
+
+    expected = _quiet_sun_expected((100, 100), field=80 * u.G, velocity=400 * u.m / u.s)
+    out = {}
+    for engine, seed in (("frames", 1), ("blocks", 2)):
+        observed = reduce(integrate(expected, duration=1 * u.min, engine=engine, seed=seed,
+                                    progress=False))
+        out[engine] = observed.magnetogram.to_value(u.G)
+    f, b = out["frames"], out["blocks"]
+    return (f"B mean {f.mean():.2f} vs {b.mean():.2f} G; std {f.std():.3f} vs {b.std():.3f} G "
+            f"(frames vs blocks, 10⁴ px, 1 min)")
+
+
+def _quiet_profile():
+    from gongsynth.photosphere import model_photosphere, synthesize
+
+    fine = np.linspace(676.73, 676.83, 401) * u.nm
+    columns = model_photosphere(shape=(128, 128), pixel_size=96 * u.km, spot=False, plage=False,
+                                seed=3)
+    mean = synthesize(columns, wavelength=fine).I.value.mean(axis=(0, 1), dtype=np.float64)
+    depth = 1 - mean.min() / mean[0]
+    fwhm = _fwhm(fine.to_value(u.pm), mean[0] - mean)
+    return f"depth {depth:.3f}, FWHM {fwhm:.2f} pm, continuum {mean[0]:.3e} erg/(s cm² sr cm)"
+
+
 ROWS = [
     Row("v0", "v0, velocity per radian of phase", "2151.86 m/s/rad (paper Eq. 5; design §3.6)",
         "tests/test_instrument.py::test_v0_from_fsr_matches_paper", _v0),
@@ -301,12 +361,25 @@ ROWS = [
     Row("filter_first", "Filter first = paper's literal order", "identical to float precision "
         "(design §1)", "tests/test_polarimetry.py::test_filter_first_equals_the_papers_literal_order",
         _filter_first),
+    Row("profile", "Mean quiet-Sun Ni I profile (built-in photosphere)",
+        "depth 0.60, FWHM 10 pm (solar line at disk centre)",
+        "tests/test_synthesis.py::test_quiet_sun_mean_profile_has_the_solar_depth_and_width",
+        _quiet_profile),
     Row("psf", "PSF: Airy zero, FWHM", "1.22λ/D = 6.08″ (design §3.9)",
         "tests/test_optics.py::test_pure_airy_matches_analytic_pattern_and_first_zero", _psf),
     Row("flux", "Flux conservation, PSF + pixelization", "exact on the default grid",
         "tests/test_optics.py::test_flux_conservation_through_psf_and_pixelization", _flux),
     Row("counts", "Quiet-Sun disk-centre counts", "~1.2e5 e⁻ per frame (design §3.10)",
         "tests/test_optics.py::test_quiet_sun_disk_centre_counts", _counts),
+    Row("schedule", "Frame schedule and dither", "6000 frames per plane in 10 min; mean dither "
+        "182 ADU (paper Sec. 3.2; design §3.11)",
+        "tests/test_schedule.py::test_dither_triangle_shape_and_mean", _schedule),
+    Row("noise", "Magnetogram and Doppler noise per pixel, quiet Sun at disk centre",
+        "falls as 1/√duration; a few G in 1 min",
+        "tests/test_camera.py::test_noise_scales_as_inverse_sqrt_duration", _noise),
+    Row("engines", "Camera engines: frames vs blocks", "same mean and variance (statistically "
+        "equivalent)", "tests/test_camera.py::test_engines_agree_on_raw_planes_and_observables",
+        _engines),
     Row("mdi_noise", "Real MDI magnetogram noise", "std 10.7 G, robust σ 9.7 G (PROVENANCE.md)",
         "tests/test_statistics.py::test_mdi_quiet_sun_noise_as_in_provenance", _mdi_noise),
 ]
