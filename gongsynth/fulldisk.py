@@ -22,8 +22,8 @@ held.  Nothing lies beyond the limb.
 
 Run time is ~6 µs per on-disk sample (synthesis plus filters): ~60 s for the
 11 M samples of the default grid on 2 cores.  ``supersampling=2`` or ``1`` is
-6× or 25× faster; the counts then differ from the default by the amounts
-given in `full_disk_scene`.
+6× or 25× faster; the counts then differ from the default by 0.75 % or 2.3 %
+rms (see `full_disk_scene`).
 """
 import math
 import warnings
@@ -232,10 +232,11 @@ def full_disk_scene(source, *, obstime=None, instrument=None, detector_shape=Non
     supersampling : int, optional
         Samples per detector pixel along each axis; default
         ``instrument.supersampling`` (5).  Quick looks: 2 (6× faster) or 1
-        (25× faster).  Measured on the built-in photosphere (64×64 detector
-        pixels at disk centre), the expected counts differ from those at 5 by
-        ~0.9 % (rms) at 2 and ~2.5 % at 1 (mostly point-sampling noise of the
-        granulation), and the PSF kernel is slightly aliased at 1.
+        (25× faster).  Measured on the built-in photosphere (sunspot tile,
+        64 × 64 pixels at disk centre), the expected counts differ from those
+        at 5 by 0.75 % rms (2) and 2.3 % rms (1), and B_LOS by 10 G and 25 G
+        rms (for 200 G rms field): point sampling of the sub-pixel structure.
+        The PSF kernel is also slightly aliased at 1.
     wavelength : `~astropy.units.Quantity`, optional
         Synthesis grid (default: the paper's 51 points).
     mueller : array_like, optional
