@@ -256,3 +256,42 @@ def test_bad_input_is_rejected():
         NiLine(line_strength=-1.0)
     with pytest.raises(ValueError, match="NiLine.limb_darkening"):
         NiLine(limb_darkening=(0.5, 0.6))
+
+
+# ------------------------------------------------- optional: true radiative transfer
+@pytest.mark.slow
+def test_me_line_is_realistic_against_lightweaver_falc():
+    """LTE polarised transfer in FAL-C (lightweaver) vs the ME line: same depth, V and sign."""
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")        # lightweaver warns on import without a config file
+        pytest.importorskip("lightweaver")
+    from gongsynth.photosphere.reference import falc_stokes
+
+    lam = np.linspace(676.70, 676.86, 321) * u.nm
+    fields = np.array([0.0, 100.0, 1000.0])
+    rt = falc_stokes(fields * u.G, wavelength=lam)
+    me = synthesize(columns(fields), wavelength=lam)
+    assert rt.shape == me.shape == (1, 3, 321)
+    I_rt, V_rt = rt.I.value[0].astype(float), rt.V.value[0].astype(float)
+    I_me, V_me = me.I.value[0].astype(float), me.V.value[0].astype(float)
+    # continuum: FAL-C in LTE gives 2.7e14, the observed disk centre 3.0e14
+    assert I_rt[0, 0] == pytest.approx(I_me[0, 0], rel=0.15)
+
+    def depth_fwhm(i):
+        ic = i[0]
+        below = lam.value[i < ic - 0.5 * (ic - i.min())]
+        return 1 - i.min() / ic, (below[-1] - below[0]) * 1000
+
+    d_rt, w_rt = depth_fwhm(I_rt[0])
+    d_me, w_me = depth_fwhm(I_me[0])
+    assert d_me == pytest.approx(d_rt, abs=0.03)          # 0.673 vs 0.672
+    assert 0.7 < w_me / w_rt < 1.1                         # 9.1 pm vs 11.5 pm (single column)
+    assert lam.value[np.argmin(I_rt[0])] == pytest.approx(LAM0, abs=1e-3)
+    for k in (1, 2):
+        amp_rt = np.abs(V_rt[k]).max() / I_rt[k, 0]
+        amp_me = np.abs(V_me[k]).max() / I_me[k, 0]
+        assert 0.85 < amp_me / amp_rt < 1.2                # 100 G: 5.1 % vs 4.6 %; 1 kG: 31 % vs 29 %
+        # same sign convention and lobe positions (within 2 pm)
+        assert lam.value[np.argmax(V_rt[k])] < LAM0 < lam.value[np.argmin(V_rt[k])]
+        assert abs(lam.value[np.argmax(V_rt[k])] - lam.value[np.argmax(V_me[k])]) < 2e-3
