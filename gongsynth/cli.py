@@ -87,24 +87,33 @@ def _simulation_config(args):
 
 
 def _run_simulate(args):
+    from .atomic import check_writable
+    from .output import planned_files
     from .pipeline import simulate, simulate_many
 
     config = _simulation_config(args)
     progress = not args.quiet
     if args.latitude and len(args.latitude) > 1:
         latitudes = u.Quantity(args.latitude, u.deg)
+        folders = [_sweep_folder(args.out, lat) for lat in latitudes]
+        # Refuse before hours of computing, not after.
+        check_writable([p for f in folders for p in planned_files(f)], args.overwrite)
         results = simulate_many(latitudes=latitudes, config=config, workers=args.workers,
                                 progress=progress)
-        for result in results:
-            folder = args.out / f"lat{result.config.latitude.to_value(u.deg):+05.1f}"
+        for result, folder in zip(results, folders):
             result.save(folder, overwrite=args.overwrite)
             _say(args, f"latitude {result.config.latitude:.1f}: wrote {folder}")
     else:
+        check_writable(planned_files(args.out), args.overwrite)
         result = simulate(config=config, progress=progress)
         paths = result.save(args.out, overwrite=args.overwrite)
         _say(args, "wrote " + ", ".join(str(p) for p in paths))
         _say(args, result.summary())
     return EXIT_OK
+
+
+def _sweep_folder(out, latitude):
+    return out / f"lat{latitude.to_value(u.deg):+05.1f}"
 
 
 def _run_compare(args):

@@ -291,6 +291,10 @@ def degrade_to_gong(smap, instrument=None, *, psf=None, native_fwhm=None, min_co
     for key in ("telescop", "content", "rsun_obs", "rsun_ref", "origin", "dtype"):
         if key in aligned.meta:
             header[key] = aligned.meta[key]
+    # Keep the observation time (make_fitswcs_header writes the frame's reference date).
+    header["date-obs"] = smap.date.isot
+    if smap.reference_date != smap.date:
+        header["date-avg"] = smap.reference_date.isot
     psf_note = ("no PSF" if kernel is None else
                 "GONG PSF" if psf is None else "user PSF") + (
         f" (native FWHM {native_fwhm} removed from the seeing)" if native_fwhm is not None else "")

@@ -296,7 +296,7 @@ def full_disk_scene(source, *, obstime=None, instrument=None, detector_shape=Non
     have_truth = True
     blocks = list(_row_blocks(grid[0], grid[1], chunk_size))
     if progress:
-        from tqdm.auto import tqdm
+        from tqdm import tqdm
         blocks = tqdm(blocks, desc="full-disk synthesis", unit="block")
     for rows in blocks:
         g = disk_geometry(grid, scale, obstime=obstime, rows=rows)

@@ -144,8 +144,9 @@ class GONGSynthMap(GenericMap):
     pseudo-continuum or the ground truth they are compared with.
 
     Recognised by ``ORIGIN = 'gongsynth'`` in the header.  Magnetograms and
-    truth maps use sunpy's ``hmimag`` colormap over ±150 G, Dopplergrams a
-    diverging map over ±1.5 km/s, continua grey.
+    truth maps are shown as GONG shows them, grey from -150 G (black) to
+    +150 G (white); Dopplergrams with a diverging map over ±1.5 km/s;
+    continua grey.
 
     Examples
     --------
@@ -163,7 +164,7 @@ class GONGSynthMap(GenericMap):
         content = str(self.meta.get("content", ""))
         limit = _DISPLAY_RANGE.get(content)
         if content in ("MAGNETOGRAM", "TRUE B_LOS"):
-            self.plot_settings["cmap"] = "hmimag"
+            self.plot_settings["cmap"] = "gray"  # GONG's own display: black -150 G, white +150 G
         elif content == "DOPPLERGRAM":
             self.plot_settings["cmap"] = "RdBu_r"
         else:

@@ -8,7 +8,7 @@ from astropy.io import fits
 
 from .atomic import atomic_path, check_writable
 
-__all__ = ["save_result", "PRODUCT_FILES"]
+__all__ = ["save_result", "planned_files", "PRODUCT_FILES"]
 
 #: File name of each map product.
 PRODUCT_FILES = {
@@ -21,6 +21,27 @@ PRODUCT_FILES = {
 RAW_FILE = "raw.fits"
 CONFIG_FILE = "config.toml"
 QUICKLOOK_FILE = "quicklook.png"
+
+
+def planned_files(directory, *, quicklook=True, truth=True):
+    """
+    The files `save_result` writes into ``directory`` (to check them before a long run).
+
+    Parameters
+    ----------
+    directory : path-like
+    quicklook : bool
+    truth : bool
+        Whether the result has ground-truth maps.
+
+    Returns
+    -------
+    list of `pathlib.Path`
+    """
+    directory = Path(directory)
+    names = [f for k, f in PRODUCT_FILES.items() if truth or not k.startswith("truth")]
+    names += [RAW_FILE, CONFIG_FILE] + ([QUICKLOOK_FILE] if quicklook else [])
+    return [directory / n for n in names]
 
 
 def save_result(result, directory, *, overwrite=False, quicklook=True):
@@ -45,11 +66,8 @@ def save_result(result, directory, *, overwrite=False, quicklook=True):
     """
     directory = Path(directory)
     maps = {name: getattr(result, name) for name in PRODUCT_FILES if getattr(result, name) is not None}
-    targets = [directory / PRODUCT_FILES[name] for name in maps]
-    targets += [directory / RAW_FILE, directory / CONFIG_FILE]
-    if quicklook:
-        targets.append(directory / QUICKLOOK_FILE)
-    check_writable(targets, overwrite)
+    check_writable(planned_files(directory, quicklook=quicklook, truth=result.truth is not None),
+                   overwrite)
     directory.mkdir(parents=True, exist_ok=True)
 
     written = []

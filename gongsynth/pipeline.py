@@ -164,9 +164,15 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="bl
 
     Examples
     --------
+    A small, quick run (the defaults simulate GONG's full 860 × 860 detector
+    for 10 minutes):
+
     >>> import astropy.units as u
-    >>> result = simulate(duration=1 * u.min, detector_shape=32, resolutions=(1,), seed=1,
-    ...                   progress=False, config=None)  # doctest: +SKIP
+    >>> result = simulate(duration=1 * u.min, detector_shape=16, resolutions=(1,), seed=1,
+    ...                   photosphere_shape=(64, 64), photosphere_pixel_size=1536 * u.km,
+    ...                   progress=False)
+    >>> result.magnetogram.unit, result.magnetogram.data.shape, result.config.seed
+    (Unit("G"), (16, 16), 1)
     """
     if config is None:
         kwargs = dict(latitude=latitude, duration=duration, engine=engine, mode=mode,
@@ -185,15 +191,25 @@ def _run(config, *, stokes, flat, dark, progress):
     from . import camera, optics, polarimetry
     from . import scene as scene_mod
 
+    from tqdm.auto import tqdm
+
     inst = config.instrument
     timings = {}
     clock = time.perf_counter()
+    n_stages = 7 if config.mode == "tiled" and stokes is None else 6
+    bar = tqdm(total=n_stages, desc="gongsynth: spectra", disable=not progress, unit="stage",
+               bar_format="{desc:<28s}{bar}| {n_fmt}/{total_fmt} [{elapsed}]")
+    upcoming = {"photosphere": "spectra", "synthesis": "filters", "filters": "scene",
+                "scene": "optics", "synthesis+scene": "optics", "optics": "camera",
+                "camera": "reduction", "reduction": "maps", "maps": "done"}
 
     def lap(name):
         nonlocal clock
         now = time.perf_counter()
         timings[name] = now - clock
         clock = now
+        bar.set_description_str(f"gongsynth: {upcoming[name]}")
+        bar.update(1)
 
     if config.mode == "full-disk":
         if stokes is not None:
@@ -257,6 +273,7 @@ def _run(config, *, stokes, flat, dark, progress):
             extra={**extra, "truthpsf": True}),
     )
     lap("maps")
+    bar.close()
     return SimulationResult(raw=raw, scene=counts, resolution_map=light.resolution_map(inst),
                             config=config, timings=timings, **products)
 

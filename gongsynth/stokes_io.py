@@ -23,14 +23,13 @@ replaced with ``overwrite=True``.
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from pathlib import Path
 
 import astropy.units as u
 import numpy as np
 from astropy.io import fits
 
+from .atomic import atomic_path, check_writable
 from .stokes import RADIANCE_UNIT, STOKES, StokesCube
 from .validation import check_quantity
 
@@ -77,8 +76,7 @@ def write_fits(cube, path, *, overwrite=False):
     if not isinstance(cube, StokesCube):
         raise TypeError(f"cube must be a StokesCube, got {type(cube).__name__}")
     path = Path(path)
-    if path.exists() and not overwrite:
-        raise FileExistsError(f"{path} exists; pass overwrite=True to replace it")
+    check_writable([path], overwrite)
     primary = fits.PrimaryHDU()
     hdr = primary.header
     hdr["CONTENT"] = (FITS_CONTENT, "file layout: gongsynth.stokes_io")
@@ -105,15 +103,8 @@ def write_fits(cube, path, *, overwrite=False):
         blos = fits.ImageHDU(cube.blos.to_value(u.G).astype(np.float32), name="BLOS")
         blos.header["BUNIT"] = "G"
         hdus.append(blos)
-    fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent or ".")
-    os.close(fd)
-    try:
+    with atomic_path(path, overwrite=overwrite) as tmp:
         fits.HDUList(hdus).writeto(tmp, overwrite=True)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        raise
 
 
 def read_fits(path):

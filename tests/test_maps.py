@@ -33,7 +33,7 @@ def test_product_map_round_trips_through_sunpy(tmp_path):
     hgs = again.pixel_to_world(*(np.array(again.data.shape[::-1]) - 1) / 2 * u.pix).transform_to(
         frames.HeliographicStonyhurst(obstime=again.date))
     assert hgs.lat.to_value(u.deg) == pytest.approx(60, abs=1e-6)
-    assert again.plot_settings["cmap"] == "hmimag"
+    assert again.plot_settings["cmap"] == "gray"
 
 
 def test_real_gong_header_is_not_claimed():

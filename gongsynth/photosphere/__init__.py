@@ -12,4 +12,5 @@ from .line import NiLine
 from .model import model_photosphere
 from .synthesis import default_wavelength, synthesize, zeeman_splitting
 
-__all__ = ["Photosphere", "NiLine", "model_photosphere", "synthesize", "default_wavelength", "zeeman_splitting"]
+__all__ = ["Photosphere", "NiLine", "model_photosphere", "synthesize", "default_wavelength",
+           "zeeman_splitting"]

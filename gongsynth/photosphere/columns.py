@@ -138,7 +138,8 @@ class Photosphere:
     azimuth = property(lambda self: self._azimuth, doc="Azimuth from +x toward +y, Quantity (ny, nx) deg.")
     velocity_x = property(lambda self: self._velocity_x, doc="Plasma velocity x, Quantity (ny, nx) km/s.")
     velocity_y = property(lambda self: self._velocity_y, doc="Plasma velocity y, Quantity (ny, nx) km/s.")
-    velocity_z = property(lambda self: self._velocity_z, doc="Plasma velocity z (up), Quantity (ny, nx) km/s.")
+    velocity_z = property(lambda self: self._velocity_z,
+                          doc="Plasma velocity z (up), Quantity (ny, nx) km/s.")
     continuum = property(lambda self: self._continuum,
                          doc="Continuum relative to quiet-Sun disk centre, Quantity (ny, nx).")
     pixel_size = property(lambda self: self._pixel_size, doc="Column size, Quantity km.")

@@ -263,7 +263,8 @@ def _block_mean(a, k):
 def _scalar(q, unit, name, positive=True):
     check_quantity(q, unit, name)
     if np.ndim(q) != 0 or not np.isfinite(q.value) or (q.value <= 0 if positive else q.value < 0):
-        raise ValueError(f"{name} must be a {'positive' if positive else 'non-negative'} finite scalar, got {q}")
+        kind = "positive" if positive else "non-negative"
+        raise ValueError(f"{name} must be a {kind} finite scalar, got {q}")
     return float(q.to_value(unit))
 
 
@@ -377,7 +378,8 @@ def model_photosphere(*, shape=(1024, 1024), pixel_size=96 * u.km, seed=0, spot=
     i_p = _fraction(penumbra_continuum, "penumbra_continuum")
     contrast = _fraction(granulation_contrast, "granulation_contrast")
     if spot and r_u >= r_p:
-        raise ValueError(f"umbra_radius ({umbra_radius}) must be smaller than penumbra_radius ({penumbra_radius})")
+        raise ValueError(f"umbra_radius ({umbra_radius}) must be smaller than "
+                         f"penumbra_radius ({penumbra_radius})")
     box = (ny * px, nx * px)
     if spot and 2.2 * r_p > min(box):
         raise ValueError(

@@ -102,7 +102,8 @@ def falc_stokes(field, *, inclination=0 * u.deg, wavelength=None, instrument=Non
         for line in nickel.lines:
             # Other Ni lines (outside the window) need some Zeeman pattern to be
             # polarisable at all; their J values do not allow LS coupling.
-            if abs(line.iLevel.J - line.jLevel.J) > 1 or not (line.iLevel.lsCoupling and line.jLevel.lsCoupling):
+            ls = line.iLevel.lsCoupling and line.jLevel.lsCoupling
+            if abs(line.iLevel.J - line.jLevel.J) > 1 or not ls:
                 line.gLandeEff = 1.0
             if abs(line.lambda0 - 676.964) < 0.01:
                 target = line
