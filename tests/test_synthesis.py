@@ -80,7 +80,9 @@ def test_zeeman_splitting_at_3kG_is_resolved():
     np.testing.assert_allclose(transverse, [-split, 0.0, split], atol=0.3)
     # Fully split V: the σ components carry opposite circular polarisation.
     v = cube.V.value[0, 0]
-    assert v[np.argmin(np.abs(lam - (LAM0 - split / 1000)))] > 0 > v[np.argmin(np.abs(lam - (LAM0 + split / 1000)))]
+    blue_sigma = np.argmin(np.abs(lam - (LAM0 - split / 1000)))
+    red_sigma = np.argmin(np.abs(lam - (LAM0 + split / 1000)))
+    assert v[blue_sigma] > 0 > v[red_sigma]
 
 
 def test_linear_polarisation_vanishes_for_longitudinal_and_appears_for_inclined_fields():
