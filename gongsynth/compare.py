@@ -285,16 +285,20 @@ def degrade_to_gong(smap, instrument=None, *, psf=None, native_fwhm=None, min_co
         binned.shape, aligned.reference_coordinate,
         reference_pixel=u.Quantity([refx, refy], u.pix),
         scale=u.Quantity([plate, plate], u.arcsec / u.pix),
-        instrument=aligned.instrument, observatory=aligned.observatory,
-        wavelength=aligned.wavelength, unit=aligned.unit,
+        unit=aligned.unit,
     )
-    for key in ("telescop", "content", "rsun_obs", "rsun_ref", "origin", "dtype"):
-        if key in aligned.meta:
-            header[key] = aligned.meta[key]
-    # Keep the observation time (make_fitswcs_header writes the frame's reference date).
-    header["date-obs"] = smap.date.isot
+    # Keep what the observation is and when it was taken (make_fitswcs_header writes the
+    # frame's reference date as DATE-OBS).
+    for key in ("telescop", "instrume", "obsrvtry", "detector", "wavelnth", "waveunit", "content",
+                "rsun_obs", "rsun_ref", "origin", "dtype"):
+        if key in smap.meta:
+            header[key] = smap.meta[key]
+    for key, value in (("instrume", smap.instrument), ("obsrvtry", smap.observatory)):
+        if key not in header and value:
+            header[key] = str(value)
+    header["date-obs"] = smap.date.utc.isot
     if smap.reference_date != smap.date:
-        header["date-avg"] = smap.reference_date.isot
+        header["date-avg"] = smap.reference_date.utc.isot
     psf_note = ("no PSF" if kernel is None else
                 "GONG PSF" if psf is None else "user PSF") + (
         f" (native FWHM {native_fwhm} removed from the seeing)" if native_fwhm is not None else "")

@@ -224,6 +224,8 @@ def test_real_mdi_degraded_to_gong(mdi, mdi_gong):
     g = mdi_gong
     assert g.scale.axis1 == 2.5 * u.arcsec / u.pix
     assert g.unit == u.G
+    assert g.date == mdi.date and g.reference_date == mdi.reference_date
+    assert g.rsun_obs == mdi.rsun_obs
     # Same tangent point (disk centre); GONG pixel edges at whole multiples of 2.5" from it.
     assert g.reference_coordinate.Tx == mdi.reference_coordinate.Tx == 0 * u.arcsec
     ref = g.reference_pixel
@@ -259,6 +261,8 @@ def test_real_hmi_postel_patch_degraded_to_gong():
     g = degrade_to_gong(hmi)
     assert isinstance(g.coordinate_frame, frames.Helioprojective)
     assert local_pixel_scale(g).to_value(u.arcsec) == pytest.approx(2.5, rel=1e-6)
+    assert g.date == hmi.date and g.reference_date == hmi.reference_date
+    assert g.observer_coordinate.separation_3d(hmi.observer_coordinate) < 1 * u.km
     # About 1024 x 0.505" / 2.5" = 207 GONG pixels across, centred on disk centre.
     assert 200 <= g.data.shape[0] <= 212
     x, y = g.wcs.world_to_pixel(SkyCoord(0 * u.arcsec, 0 * u.arcsec, frame=g.coordinate_frame))
@@ -410,3 +414,20 @@ def test_gongsynth_product_file_compared_off_disk_centre(tmp_path):
     cont.save(cont_path)
     with pytest.raises(ObservationKindError, match="PSEUDO-CONTINUUM"):
         load_observation(cont_path)
+
+
+def test_command_line_compare(tmp_path, capsys):
+    cli = pytest.importorskip("gongsynth.cli")
+    rng = np.random.default_rng(13)
+    sim = write_gong_fits(tmp_path / "sim.fits", rng.normal(0, 3.0, (860, 860)))
+    obs = write_gong_fits(tmp_path / "obs.fits", rng.normal(0, 4.0, (860, 860)))
+    out = tmp_path / "cmp.png"
+    assert cli.main(["compare", str(sim), str(obs), "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "noise: robust sigma [G]" in printed and "KS distance" in printed
+    assert out.stat().st_size > 10_000
+    assert cli.main(["compare", str(sim), str(obs), "--out", str(out)]) == 3  # refuses to overwrite
+    assert "overwrite" in capsys.readouterr().err
+    continuum = real_file(MDI_IC)
+    assert cli.main(["compare", str(sim), str(continuum)]) == 2
+    assert "not a magnetogram" in capsys.readouterr().err
