@@ -94,7 +94,8 @@ def main():
     t_base = time.perf_counter() - t0
     ns_base = t_base / strip_pf * 1e9
     print(f"\nplain-numpy per-frame loop, {args.rows}x{n} px, 1 min: {t_base:.2f} s "
-          f"({ns_base:.1f} ns per pixel-frame; full 10-min run extrapolated: {ns_base * full_pf / 1e9:.0f} s)")
+          f"({ns_base:.1f} ns per pixel-frame; full 10-min run extrapolated: "
+          f"{ns_base * full_pf / 1e9:.0f} s)")
 
     integrate(expected[:, :2, :2], duration=1 * u.s, engine="frames", seed=0, flat=flat[:2, :2],
               dark=dark[:2, :2], progress=False)  # compile / load the numba cache first

@@ -441,6 +441,8 @@ def _header(schedule, engine, root, flat_source, dark_source, n_snap, inst):
     header["GSVERS"] = (__version__, "gongsynth version")
     header["ENGINE"] = (engine, "camera engine (frames | blocks)")
     header["SEED"] = (entropy if entropy < 2**63 else str(entropy), "root seed entropy")
+    if root.spawn_key:
+        header["SEEDKEY"] = (" ".join(map(str, root.spawn_key)), "spawn key of the camera's SeedSequence")
     header["ITIME"] = (schedule.duration.to_value(u.s), "[s] observing time")
     header["EXPTIME"] = (inst.exposure_time.to_value(u.s), "[s] exposure of one frame")
     header["FRAMERAT"] = (inst.frame_rate.to_value(u.Hz), "[Hz] camera frame rate")
