@@ -172,6 +172,14 @@ def synthesize(photosphere, mu=1.0, wavelength=None, *, los_azimuth=-90 * u.deg,
         the photosphere's pixel size, ``blos`` = B·n (G, the ground truth) and
         ``meta`` recording the line parameters and geometry.
 
+    Notes
+    -----
+    Cost and memory: the default 1024² × 51 cube takes ~5 s on 2 cores
+    (``benchmarks/bench_synthesis.py``) and the output (4 × 204 MiB float32)
+    plus ~64 bytes per column of temporaries; nothing of size (ny, nx, nλ) is
+    allocated besides the output.  The weak-field relation
+    V = −4.67e−13 g λ0² B_LOS dI/dλ holds to 0.7 % at 100 G and 6.5 % at 300 G.
+
     Examples
     --------
     >>> import numpy as np, astropy.units as u
