@@ -42,7 +42,8 @@ def test_geometry_matches_sunpy(obstime):
     time = DEFAULT_OBSTIME if obstime is None else Time(obstime)
     from astropy.coordinates import SkyCoord
     from sunpy.coordinates import Helioprojective
-    centre = SkyCoord(0 * u.arcsec, 0 * u.arcsec, frame=Helioprojective(observer=get_earth(time), obstime=time))
+    frame = Helioprojective(observer=get_earth(time), obstime=time)
+    centre = SkyCoord(0 * u.arcsec, 0 * u.arcsec, frame=frame)
     smap = sunpy.map.Map(np.zeros(shape), wcs_header(shape, scale, centre))
     yy, xx = np.mgrid[:shape[0], :shape[1]]
     hgs = smap.pixel_to_world(xx * u.pix, yy * u.pix).transform_to(HeliographicStonyhurst(obstime=time))

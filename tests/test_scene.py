@@ -8,7 +8,6 @@ import sunpy.map
 from sunpy.coordinates import HeliographicStonyhurst, sun
 from sunpy.sun.constants import radius as R_SUN
 
-from gongsynth import GONGInstrument
 from gongsynth import scene as scene_mod
 from gongsynth.optics import convolve, psf_kernel
 from gongsynth.scene import (DEFAULT_OBSTIME, EARTH_RADIANCE_UNIT, field_centre, radiance_at_earth,
