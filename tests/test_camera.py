@@ -288,3 +288,34 @@ def test_planes_without_frames_hold_zero():
     raw = integrate(GOOD, duration=1 * u.s, seed=1, progress=False)
     assert raw.frames_per_plane.tolist() == [20, 20, 20, 0, 0, 0]
     assert np.all(raw.data[3:] == 0)
+
+
+@pytest.mark.parametrize("lam", [0.5, 7.0, 10.0, 14.0, 40.0, 1e3, 5e4, 3e5])
+def test_poisson_sampler_matches_the_poisson_distribution(lam):
+    from scipy import stats
+
+    from gongsynth._camera_kernels import poisson_kernel
+
+    n = 200_000
+    x = poisson_kernel(np.full(n, lam), np.uint64(2024), np.uint64(7), np.uint64(int(lam * 10)))
+    assert np.all(x == np.round(x)) and x.min() >= 0
+    # Chi-square over ~40 bins of equal probability (the PD rare steps dominate at λ = 10-20).
+    edges = np.unique(stats.poisson.ppf(np.linspace(0, 1, 42)[1:-1], lam))
+    observed = np.bincount(np.searchsorted(edges, x, side="left"), minlength=edges.size + 1)
+    probs = np.diff(np.concatenate([[0], stats.poisson.cdf(edges, lam), [1]]))
+    chi2 = ((observed - n * probs) ** 2 / (n * probs)).sum()
+    assert stats.chi2.sf(chi2, edges.size) > 1e-3
+    assert abs(x.mean() - lam) < 4 * np.sqrt(lam / n)
+
+
+def test_normal_sampler_including_the_ziggurat_tail():
+    from scipy import stats
+
+    from gongsynth._camera_kernels import normal_kernel
+
+    z = normal_kernel(1_000_000, np.uint64(99), np.uint64(1), np.uint64(5))
+    assert stats.kstest(z, "norm").pvalue > 1e-3
+    tail = 2 * stats.norm.sf(3.442619855899)  # beyond the base strip: the exact-tail branch
+    count = np.count_nonzero(np.abs(z) > 3.442619855899)
+    assert abs(count - tail * z.size) < 4 * np.sqrt(tail * z.size)
+    assert abs(np.mean(z**4) - 3) < 4 * np.sqrt(96 / z.size)
