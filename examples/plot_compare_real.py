@@ -21,7 +21,6 @@ import os
 import tempfile
 from pathlib import Path
 
-import astropy.units as u
 import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.colors import Normalize
@@ -94,8 +93,9 @@ for ax, smap, title in ((axes[0], mdi, "MDI, 1.99″ pixels"), (axes[1], mdi_gon
 # sunpy's ``GONGMagnetogramMap`` and blanks the sky.  Swap in the simulated
 # full-disk magnetogram here.
 
-header = fits.Header.fromtextfile(sunpy.data.test.get_test_filepath("gong_magnetogram.header"))
-geometry = sunpy.data.test.get_dummy_map_from_header(sunpy.data.test.get_test_filepath("gong_magnetogram.header"))
+header_file = sunpy.data.test.get_test_filepath("gong_magnetogram.header")
+header = fits.Header.fromtextfile(header_file)
+geometry = sunpy.data.test.get_dummy_map_from_header(header_file)
 rho, _ = disk_coordinates(geometry)
 values = np.random.default_rng(7).normal(0.0, 3.0, (860, 860))
 values[~(rho < 1)] = header["SKYVALUE"]

@@ -328,6 +328,8 @@ class MapSummary:
         Histogram of |B| on log-spaced bins.
     noise : `~gongsynth.statistics.NoiseEstimate`
         Quiet-box noise near disk centre.
+    map : `~sunpy.map.GenericMap`
+        The map that was measured (degraded if ``degraded``), in G.
     """
 
     label: str

@@ -501,9 +501,11 @@ def noise_estimate(smap, *, box=60 * u.arcsec, layout="grid", max_radius=0.35, g
     deviation and the robust sigma 1.4826 × MAD are computed.  The quietest box
     (smallest standard deviation) gives the headline robust ``sigma``, its
     plain ``std`` and its pixel-difference noise; medians over all boxes are
-    reported too.  On a map of uniform white noise σ, ``median_sigma`` is
-    unbiased; selecting the quietest box biases ``sigma`` low by roughly one
-    to two times σ/√(2 N) (N pixels per box).
+    reported too.  On a map of uniform white noise σ, ``median_std`` and
+    ``median_sigma`` are unbiased; selecting the quietest box biases it low:
+    its std is expected at σ (1 + E[min of n normals] / √(2N)) for n boxes of
+    N pixels, 0.94 σ for the default 29 boxes of 24 × 24 GONG pixels (measured
+    over 40 noise maps: std 0.939 ± 0.012 σ, robust ``sigma`` 0.937 ± 0.041 σ).
 
     Two layouts reproduce the two ways the quiet-Sun numbers in
     ``PROVENANCE.md`` were measured:

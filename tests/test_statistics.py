@@ -1,4 +1,4 @@
-"""Noise, histogram and limb-darkening statistics: analytic cases and the real-data numbers of PROVENANCE.md."""
+"""Noise, histogram and limb-darkening statistics: analytic cases and PROVENANCE.md's real-data numbers."""
 import math
 import warnings
 
