@@ -218,7 +218,7 @@ def snapshot_index(n_frames, n_snapshots):
 
 def _check_expected(expected):
     check_quantity(expected, u.electron, "expected")
-    values = expected.to_value(u.electron)
+    values = np.asarray(expected.to_value(u.electron), dtype=np.float64)
     if values.ndim == 3:
         values = values[None]
     if values.ndim != 4 or values.shape[1] != N_PLANES or min(values.shape) < 1:

@@ -263,6 +263,7 @@ GOOD = np.full((6, 4, 5), 1e3) * u.electron
     (dict(chunk_rows=0), ValueError, "chunk_rows"),
     (dict(workers=0), ValueError, "workers"),
     (dict(duration=1.5 / 60 * u.s), ValueError, "duration"),
+    (dict(expected=np.ones((61, 6, 4, 5)) * u.electron), ValueError, "snapshots"),
     (dict(instrument="GONG"), TypeError, "instrument"),
     (dict(instrument=GONG.replace(read_noise=0.5 * u.adu)), ValueError, "engine='frames'"),
 ])
