@@ -327,3 +327,31 @@ def test_real_gong_zqa_from_nso(tmp_path):
 
     noise = noise_estimate(m)
     assert 0.5 * u.G < noise.sigma < 20 * u.G
+
+
+def test_real_hmi_full_disk_continuum_rolled_180_degrees():
+    """sunpy's resampled real HMI continuum (100 x 100, 20.66"/px, CROTA2 = 179.93 deg)."""
+    import sunpy.data.test
+
+    from gongsynth.compare import compare_limb_darkening, degrade_to_gong
+    from gongsynth.statistics import disk_centre_level
+
+    path = sunpy.data.test.get_test_filepath("resampled_hmi.fits")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no BadHeaderWarning: the disk is where the WCS says
+        m = load_observation(path, kind="continuum")
+    assert isinstance(m, HMIMap)
+    # astropy's VerifyWarning about its BLANK card is recorded, not re-emitted.
+    assert "astropy fixed the header" in m.meta["history"] and "BLANK" in m.meta["history"]
+    angle = math.degrees(math.atan2(m.rotation_matrix[1, 0], m.rotation_matrix[0, 0]))
+    assert abs(angle) == pytest.approx(179.93, abs=0.01)
+    # PROVENANCE.md: disk-centre mean about 60 500 DN/s.
+    assert disk_centre_level(m).to_value(u.DN / u.s) == pytest.approx(60500, rel=0.05)
+    # Turned upright onto 2.5" pixels, the centre-to-limb profile is unchanged.
+    upright = degrade_to_gong(m, psf=False)
+    assert np.allclose(upright.rotation_matrix, np.eye(2))
+    result = compare_limb_darkening(m, upright, degrade=False, bins=8, plot=False)
+    assert result.max_difference < 0.02
+    assert result.centre_ratio == pytest.approx(1, abs=0.02)
+    with pytest.raises(ObservationKindError, match="CONTINUUM INTENSITY"):
+        load_observation(path)
