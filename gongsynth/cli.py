@@ -121,7 +121,7 @@ def _run_compare(args):
 
     report = compare_files(args.simulated, args.observed, out=args.out,
                            overwrite=args.overwrite)
-    print(report)
+    print(report.summary())
     return EXIT_OK
 
 
