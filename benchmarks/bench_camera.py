@@ -20,6 +20,7 @@ Usage::
     python benchmarks/bench_camera.py [--quick] [--rows 16] [--workers N]
 """
 import argparse
+import os
 import resource
 import time
 
@@ -82,6 +83,8 @@ def main():
     flat = synthetic_flat((n, n))
     dark = synthetic_dark((n, n))
     full_pf = n * n * frame_schedule(10 * u.min, inst).n_frames
+    print(f"machine: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} "
+          "(other work slows every timing below)")
     print(f"input: {n}x{n} quiet-Sun disk, max {expected.max():.4g}/frame; 10 min = "
           f"{full_pf:.3g} pixel-frames; peak RSS so far {peak_rss_mb():.0f} MB")
 
@@ -124,7 +127,8 @@ def main():
         t_full = time.perf_counter() - t0
         print(f"frames engine, full {n}x{n}, 10 min: {t_full:.0f} s (target < 600 s); "
               f"{ns_base * full_pf / 1e9 / t_full:.1f}x faster than the extrapolated numpy loop; "
-              f"peak RSS {peak_rss_mb():.0f} MB (target < 2048 MB)")
+              f"peak RSS {peak_rss_mb():.0f} MB (target < 2048 MB); load average now "
+              f"{os.getloadavg()[0]:.1f}")
 
 
 if __name__ == "__main__":
