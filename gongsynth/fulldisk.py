@@ -59,6 +59,13 @@ longitude, latitude : `numpy.ndarray`
     Heliographic Stonyhurst coordinates, deg (NaN off the disk).
 x, y : `numpy.ndarray`
     Position in the photosphere's plane, km (sinusoidal projection; NaN off the disk).
+
+Examples
+--------
+>>> import astropy.units as u
+>>> g = disk_geometry((3, 3), 700 * u.arcsec)   # the corners are beyond the limb
+>>> int(g.on_disk.sum()), round(float(g.latitude[2, 1]), 1)
+(5, 47.6)
 """
 
 

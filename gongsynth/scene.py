@@ -399,6 +399,14 @@ def wcs_header(shape, pixel_scale, centre, instrument=None):
     -------
     `sunpy.util.MetaDict`
         From `sunpy.map.make_fitswcs_header`.
+
+    Examples
+    --------
+    >>> import astropy.units as u
+    >>> centre, _ = field_centre(60 * u.deg)
+    >>> header = wcs_header((100, 200), 0.5 * u.arcsec, centre)
+    >>> float(header["crpix1"]), float(header["cdelt2"]), header["ctype2"]
+    (100.5, 0.5, 'HPLT-TAN')
     """
     import sunpy.map
     inst = _instrument(instrument)
