@@ -356,7 +356,14 @@ class StokesCube:
         return StokesCube._trusted(arrays, wavelength, self._pixel_size, mu, blos, self.meta)
 
     def copy(self):
-        """A deep copy (new arrays)."""
+        """
+        A deep copy.
+
+        Returns
+        -------
+        `StokesCube`
+            With new arrays (the only method that copies the spectra).
+        """
         arrays = {name: a.copy() for name, a in self._stokes.items()}
         mu = self._mu if np.ndim(self._mu) == 0 else self._mu.copy()
         blos = None if self._blos is None else self._blos.copy()
@@ -432,6 +439,10 @@ class StokesCube:
         """
         Read a cube written by `to_fits`; see `gongsynth.stokes_io.read_fits`.
 
+        Parameters
+        ----------
+        path : str or `pathlib.Path`
+
         Returns
         -------
         `StokesCube`
@@ -444,7 +455,20 @@ class StokesCube:
         """
         Read the Stokes spectra of an RH 1.5D ``output_ray.hdf5`` file.
 
-        See `gongsynth.stokes_io.read_rh15d` for the parameters.
+        Parameters
+        ----------
+        path : str or `pathlib.Path`
+            The ``output_ray.hdf5`` file.
+        pixel_size : `~astropy.units.Quantity`, optional
+            Column size; default from a sibling ``output_indata.hdf5``.
+        mu : float, optional
+            Cosine of the ray's viewing angle (default 1).
+        wavelength_range : `~astropy.units.Quantity`, shape (2,), optional
+            Wavelength window to keep.
+        region : tuple of two slices, optional
+            (y, x) columns to read.
+
+        See `gongsynth.stokes_io.read_rh15d` for details.
 
         Returns
         -------

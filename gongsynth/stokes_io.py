@@ -126,6 +126,17 @@ def read_fits(path):
     ValueError
         If the file is not FITS, or not a gongsynth Stokes cube (missing
         extensions or keywords, wrong shapes); the message says which.
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> from astropy.io import fits
+    >>> path = os.path.join(tempfile.mkdtemp(), "image.fits")
+    >>> fits.PrimaryHDU(np.zeros((2, 2))).writeto(path)
+    >>> read_fits(path)
+    Traceback (most recent call last):
+    ...
+    ValueError: ... is not a gongsynth Stokes cube: primary header CONTENT is None, ...
     """
     path = Path(path)
     if not path.exists():
@@ -231,6 +242,18 @@ def read_rh15d(path, *, pixel_size=None, mu=1.0, wavelength_range=None, region=N
         If the file is not HDF5, lacks a Stokes variable or the wavelength,
         has inconsistent shapes, or holds RH's fill value (columns that did
         not converge).
+
+    Examples
+    --------
+    >>> import h5py, tempfile, os, astropy.units as u
+    >>> path = os.path.join(tempfile.mkdtemp(), "output_ray.hdf5")
+    >>> with h5py.File(path, "w") as f:                   # a 2 × 3-column RH-like file
+    ...     f["wavelength"] = np.linspace(676.70, 676.86, 17)
+    ...     for name in ("intensity", "stokes_Q", "stokes_U", "stokes_V"):
+    ...         f[name] = np.full((3, 2, 17), 4.6e-8 if name == "intensity" else 0, "f4")
+    >>> cube = read_rh15d(path, pixel_size=48 * u.km, wavelength_range=[676.73, 676.83] * u.nm)
+    >>> cube.shape                                          # (y, x, wavelength)
+    (2, 3, 11)
     """
     import h5py
 

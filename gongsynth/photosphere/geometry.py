@@ -37,6 +37,12 @@ def check_geometry(mu, los_azimuth, shape):
         float64, scalar kept scalar.
     azimuth : float or `numpy.ndarray`
         In radians.
+
+    Examples
+    --------
+    >>> import astropy.units as u
+    >>> check_geometry(0.5, -90 * u.deg, (4, 4))
+    (0.5, -1.5707963267948966)
     """
     if isinstance(mu, u.Quantity):
         mu = mu.to_value(u.one)

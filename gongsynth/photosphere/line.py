@@ -123,5 +123,16 @@ class NiLine:
         return np.polynomial.polynomial.polyval(mu, self.limb_darkening)
 
     def replace(self, **changes):
-        """A copy with some parameters changed (a `NiLine`)."""
+        """
+        A copy with some parameters changed.
+
+        Parameters
+        ----------
+        **changes
+            Field names and new values.
+
+        Returns
+        -------
+        `NiLine`
+        """
         return dataclasses.replace(self, **changes)

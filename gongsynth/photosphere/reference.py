@@ -80,6 +80,13 @@ def falc_stokes(field, *, inclination=0 * u.deg, wavelength=None, instrument=Non
     ------
     ImportError
         If lightweaver is not installed.
+
+    Examples
+    --------
+    >>> import astropy.units as u
+    >>> cube = falc_stokes([0, 100] * u.G)        # doctest: +SKIP
+    >>> cube.shape                                 # doctest: +SKIP
+    (1, 2, 51)
     """
     lw = _lightweaver()
     instrument = GONGInstrument() if instrument is None else instrument

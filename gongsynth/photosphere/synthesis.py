@@ -45,6 +45,12 @@ def default_wavelength():
     -------
     `~astropy.units.Quantity`
         (51,) in nm.
+
+    Examples
+    --------
+    >>> lam = default_wavelength()
+    >>> lam.size, lam[0], lam[-1]
+    (51, <Quantity 676.73 nm>, <Quantity 676.83 nm>)
     """
     return np.linspace(676.73, 676.83, 51) * u.nm
 
