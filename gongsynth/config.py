@@ -15,6 +15,7 @@ import astropy.units as u
 from astropy.time import Time
 
 from .instrument import GONGInstrument
+from .scene import DEFAULT_OBSTIME as _SCENE_OBSTIME
 from .seeding import as_seed_sequence
 from .tomlfmt import toml_value
 
@@ -24,8 +25,8 @@ __all__ = ["SimulationConfig", "ENGINES", "MODES", "DEFAULT_OBSTIME"]
 ENGINES = ("blocks", "frames")
 #: Scene modes accepted by `SimulationConfig.mode`.
 MODES = ("tiled", "full-disk")
-#: Default observation time: the Sun's B0 angle is -0.0003 deg then (sunpy.coordinates.sun.B0).
-DEFAULT_OBSTIME = "2020-06-06T06:30:00"
+#: Default observation time (B0 ≈ 0), as an ISO string.
+DEFAULT_OBSTIME = _SCENE_OBSTIME.isot
 
 _QUANTITIES = {
     "latitude": (u.deg, "heliographic latitude of the field centre on the central meridian"),

@@ -10,14 +10,11 @@ GONGSynthMap with the right units and plot settings for any gongsynth FITS file.
 import astropy.units as u
 import matplotlib.colors as mcolors
 import numpy as np
-from astropy.coordinates import SkyCoord
-from astropy.time import Time
-from sunpy.coordinates import frames, get_earth
 from sunpy.map import GenericMap, make_fitswcs_header
 
 from . import __version__
 
-__all__ = ["GONGSynthMap", "PRODUCTS", "field_centre", "product_header", "make_product_map"]
+__all__ = ["GONGSynthMap", "PRODUCTS", "product_header", "make_product_map"]
 
 #: Product names, their FITS ``CONTENT`` and ``BUNIT``.
 PRODUCTS = {
@@ -38,36 +35,6 @@ def _product(product):
     return PRODUCTS[product]
 
 
-def field_centre(latitude, obstime):
-    """
-    Helioprojective coordinate of the point at ``latitude`` on the central meridian.
-
-    Parameters
-    ----------
-    latitude : `~astropy.units.Quantity`
-        Stonyhurst heliographic latitude (angle).
-    obstime : str or `~astropy.time.Time`
-        Observation time; the observer is at Earth's centre.
-
-    Returns
-    -------
-    `~astropy.coordinates.SkyCoord`
-        In the `~sunpy.coordinates.frames.Helioprojective` frame of that observer.
-
-    Examples
-    --------
-    >>> import astropy.units as u
-    >>> c = field_centre(0 * u.deg, "2020-06-06T06:30")
-    >>> abs(c.Tx) < 1 * u.arcsec, abs(c.Ty) < 1 * u.arcsec
-    (np.True_, np.True_)
-    """
-    obstime = Time(obstime)
-    observer = get_earth(obstime)
-    point = SkyCoord(0 * u.deg, latitude, frame=frames.HeliographicStonyhurst, obstime=obstime,
-                     rsun=695700 * u.km)
-    return point.transform_to(frames.Helioprojective(observer=observer, obstime=obstime))
-
-
 def product_header(shape, *, centre, scale, product, extra=None):
     """
     FITS header of a gongsynth product map with a helioprojective WCS.
@@ -77,7 +44,7 @@ def product_header(shape, *, centre, scale, product, extra=None):
     shape : tuple of int
         (ny, nx) of the image.
     centre : `~astropy.coordinates.SkyCoord`
-        Helioprojective coordinate of the image centre (see `field_centre`).
+        Helioprojective coordinate of the image centre (see `gongsynth.scene.field_centre`).
     scale : `~astropy.units.Quantity`
         Pixel size (angle per pixel).
     product : str
@@ -152,7 +119,8 @@ class GONGSynthMap(GenericMap):
     --------
     >>> import astropy.units as u
     >>> import numpy as np
-    >>> centre = field_centre(0 * u.deg, "2020-06-06T06:30")
+    >>> from gongsynth.scene import field_centre
+    >>> centre, _ = field_centre(0 * u.deg)
     >>> m = make_product_map(np.zeros((4, 4)) * u.G, centre=centre, scale=2.5 * u.arcsec,
     ...                      product="magnetogram")
     >>> type(m).__name__, m.unit, m.measurement

@@ -105,13 +105,6 @@ class SimulationResult:
         return save_result(self, directory, overwrite=overwrite, quicklook=quicklook)
 
 
-def _latitude_geometry(latitude):
-    """μ and the LOS azimuth of a point at ``latitude`` on the central meridian (CONTRACTS)."""
-    mu = float(np.cos(latitude.to_value(u.rad)))
-    los_azimuth = -90 * u.deg if latitude >= 0 * u.deg else 90 * u.deg
-    return mu, los_azimuth
-
-
 def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="blocks", seed=None,
              instrument=None, mode="tiled", detector_shape=None, resolutions=(1, 2, 4, 8),
              obstime=None, photosphere_shape=(1024, 1024), photosphere_pixel_size=96 * u.km,
@@ -226,12 +219,12 @@ def _run(config, *, stokes, flat, dark, progress):
         if stokes is None:
             from .photosphere import synthesize
 
-            mu, los_azimuth = _latitude_geometry(config.latitude)
+            mu, los_azimuth = scene_mod.viewing_geometry(config.latitude, config.obstime)
             stokes = synthesize(_photosphere(config), mu=mu, los_azimuth=los_azimuth,
                                 instrument=inst)
             lap("synthesis")
         else:
-            _check_cube_geometry(stokes, config.latitude)
+            _check_cube_geometry(stokes, config.latitude, config.obstime)
         channels = polarimetry.channel_images(stokes, instrument=inst)
         lap("filters")
         light, truth_scene = scene_mod.tiled_scenes(
@@ -286,8 +279,10 @@ def _photosphere(config):
                              seed=child_sequence(config.seed, "photosphere"))
 
 
-def _check_cube_geometry(stokes, latitude):
-    mu, _ = _latitude_geometry(latitude)
+def _check_cube_geometry(stokes, latitude, obstime):
+    from .scene import viewing_geometry
+
+    mu, _ = viewing_geometry(latitude, obstime)
     cube_mu = np.asarray(stokes.mu)
     if cube_mu.ndim == 0 and abs(float(cube_mu) - mu) > 1e-3:
         raise ValueError(

@@ -23,12 +23,14 @@ def disk_centre():
 def disk_centre_other_seed(disk_centre):
     """The same Sun (same photosphere and spectra) observed with other camera noise."""
     from gongsynth.photosphere import model_photosphere, synthesize
+    from gongsynth.scene import viewing_geometry
     from gongsynth.seeding import child_sequence
 
     cfg = disk_centre.config
     photosphere = model_photosphere(shape=cfg.photosphere_shape, pixel_size=cfg.photosphere_pixel_size,
                                     seed=child_sequence(cfg.seed, "photosphere"))
-    stokes = synthesize(photosphere, mu=1.0)
+    mu, los_azimuth = viewing_geometry(cfg.latitude, cfg.obstime)
+    stokes = synthesize(photosphere, mu=mu, los_azimuth=los_azimuth)
     same = gongsynth.simulate(stokes, config=cfg, progress=False)
     assert np.array_equal(same.magnetogram.data, disk_centre.magnetogram.data)
     return gongsynth.simulate(stokes, config=cfg.replace(seed=12), progress=False)
