@@ -14,6 +14,7 @@ except PackageNotFoundError:  # pragma: no cover - running from a source tree
 from .instrument import GONGInstrument  # noqa: E402
 from .maps import GONGSynthMap  # noqa: E402  (registers the map source with sunpy.map.Map)
 from .pipeline import SimulationResult, simulate, simulate_many  # noqa: E402
+from .stokes import StokesCube  # noqa: E402
 
-__all__ = ["GONGInstrument", "GONGSynthMap", "SimulationResult", "simulate", "simulate_many",
-           "__version__"]
+__all__ = ["GONGInstrument", "GONGSynthMap", "SimulationResult", "StokesCube", "simulate",
+           "simulate_many", "__version__"]
