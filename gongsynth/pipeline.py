@@ -247,14 +247,20 @@ def _run(config, *, stokes, flat, dark, progress):
                            dark=dark, workers=config.workers, progress=progress)
     lap("camera")
     observed = reduce(raw, inst)
+    # Where no sunlight falls (beyond the limb) the phases are noise: blank them
+    # as real full-disk magnetograms do.  The continuum keeps its sky values.
+    light_total = counts.sum(axis=0).value
+    sky = light_total < 1e-3 * light_total.max()
+    magnetogram, doppler = _blank(observed.magnetogram, sky), _blank(observed.doppler, sky)
+    truth, truth_psf = _blank(truth, sky), _blank(truth_psf, sky)
     lap("reduction")
 
     centre = light.centre
     extra = _run_header(config)
     products = dict(
-        magnetogram=make_product_map(observed.magnetogram, centre=centre, scale=inst.plate_scale,
+        magnetogram=make_product_map(magnetogram, centre=centre, scale=inst.plate_scale,
                                      product="magnetogram", extra=extra),
-        doppler=make_product_map(observed.doppler, centre=centre, scale=inst.plate_scale,
+        doppler=make_product_map(doppler, centre=centre, scale=inst.plate_scale,
                                  product="doppler", extra=extra),
         continuum=make_product_map(observed.continuum, centre=centre, scale=inst.plate_scale,
                                    product="continuum", extra=extra),
@@ -269,6 +275,14 @@ def _run(config, *, stokes, flat, dark, progress):
     bar.close()
     return SimulationResult(raw=raw, scene=counts, resolution_map=light.resolution_map(inst),
                             config=config, timings=timings, **products)
+
+
+def _blank(image, sky):
+    """``image`` (a Quantity, or None) with NaN where ``sky`` is True."""
+    if image is None:
+        return None
+    image = u.Quantity(image)
+    return np.where(sky, np.nan, image.value) * image.unit
 
 
 def _photosphere(config):
