@@ -183,3 +183,22 @@ def test_bad_arguments():
         gongsynth.simulate(engine="fast", **SMALL)
     with pytest.raises(u.UnitsError, match="duration"):
         gongsynth.simulate(**{**SMALL, "duration": 10 * u.m})
+
+
+def test_full_disk_mode_blanks_the_sky_and_follows_the_truth():
+    coarse = gongsynth.GONGInstrument(plate_scale=25 * u.arcsec, detector_shape=86, supersampling=2)
+    result = gongsynth.simulate(mode="full-disk", instrument=coarse, seed=4, duration=1 * u.min,
+                                photosphere_shape=(256, 256), photosphere_pixel_size=384 * u.km,
+                                progress=False)
+    b = result.magnetogram
+    # The Sun's centre is the map centre; beyond the limb everything measured is blank.
+    centre = b.world_to_pixel(b.center)
+    assert abs(centre.x.value - 42.5) < 0.01 and abs(centre.y.value - 42.5) < 0.01
+    yy, xx = np.mgrid[:86, :86]
+    radius = np.hypot(xx - 42.5, yy - 42.5) * 25 * u.arcsec
+    rsun = b.rsun_obs
+    assert np.all(np.isnan(b.data[radius > 1.05 * rsun]))
+    assert np.all(np.isfinite(b.data[radius < 0.9 * rsun]))
+    inner = radius < 0.7 * rsun
+    slope, _ = robust_slope(result.truth_psf.data[inner], b.data[inner])
+    assert 0.7 < slope < 1.0
