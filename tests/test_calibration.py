@@ -42,3 +42,28 @@ def test_curve_bad_input():
         calibration_curve(np.zeros(3) * u.m, np.zeros(3) * u.G)
     with pytest.raises(TypeError, match="truth is required"):
         calibration_curve(np.zeros(3) * u.G)
+
+
+@pytest.mark.parametrize("latitude", [0, 60] * u.deg)
+def test_noiseless_psf_free_factor_is_the_line_physics(latitude):
+    """Without noise and PSF, GONG measures the pixel-averaged field up to the line's ~0.99."""
+    from gongsynth.optics import expected_counts, observe
+    from gongsynth.photosphere import model_photosphere, synthesize
+    from gongsynth.polarimetry import channel_images
+    from gongsynth.reduction import reduce
+    from gongsynth.scene import tiled_scenes, viewing_geometry
+
+    photosphere = model_photosphere(shape=(256, 256), pixel_size=384 * u.km, seed=5)
+    mu, los_azimuth = viewing_geometry(latitude)
+    stokes = synthesize(photosphere, mu=mu, los_azimuth=los_azimuth)
+    light, truth = tiled_scenes(channel_images(stokes), stokes.blos, stokes.pixel_size,
+                                latitude=latitude, resolutions=(1,), detector_shape=96)
+    measured = reduce(expected_counts(light, psf=False).value).magnetogram
+    true = observe(truth.data, truth.pixel_scale, psf=False, boundary=truth.boundary)
+    curve = calibration_curve(measured, true, threshold=100 * u.G, n_boot=10)
+    # Quiet pixels: the weak-field line physics, 0.988 for a uniform field (test_reduction).
+    assert curve.quiet.slope == pytest.approx(0.988, abs=0.005)
+    # All pixels: within ~2 % of it; kG fields are measured lower (Zeeman saturation and
+    # intensity weighting inside the pixel), which the strong-field fit shows.
+    assert curve.all_pixels.slope == pytest.approx(0.988, abs=0.02)
+    assert 0.85 < curve.strong.slope < curve.quiet.slope
