@@ -103,7 +103,7 @@ sphinx_gallery_conf = {
     "doc_module": ("gongsynth",),
     "reference_url": {"gongsynth": None},
     "backreferences_dir": "generated/modules",
-    "within_subsection_order": "FileNameSortKey",
+    "within_subsection_order": "gongsynth_gallery.StoryOrder",
     "min_reported_time": 1,
     # Show printed output, not the repr of a cell's last expression (Legend objects...).
     "capture_repr": (),
