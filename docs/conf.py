@@ -12,6 +12,7 @@ and analytics are switched off.
 import importlib.util
 import os
 import re
+import shutil
 import sys
 import warnings
 from pathlib import Path
@@ -81,6 +82,9 @@ napoleon_numpy_docstring = True
 napoleon_use_rtype = False
 napoleon_use_ivar = True
 automodapi_toctreedirnm = "api"
+# automodapi writes one page per object into docs/api but never removes the page
+# of an object that left a module's __all__; start from an empty folder.
+shutil.rmtree(DOCS / automodapi_toctreedirnm, ignore_errors=True)
 automodapi_writereprocessed = False
 automodsumm_inherited_members = False
 numpydoc_show_class_members = False
