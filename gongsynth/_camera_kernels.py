@@ -13,7 +13,10 @@ Samplers:
   uses) for λ ≥ 10: a normal deviate rounded down is accepted at once or after
   a cubic squeeze in ~99 % of cases at λ ~ 1e4, the rest is corrected exactly
   against the Poisson probabilities (log k! by its Stirling series, |error|
-  < 1e-12, for k ≥ 9); Knuth's multiplication method for λ < 10.
+  < 1e-12, for k ≥ 9) above λ = 500; below, inversion of the cumulative
+  distribution tabulated once per pixel and plane (to λ + 10√λ + 10, where the
+  tail beyond holds < 1e-20, renormalised) with a guide table: one uniform and
+  one or two comparisons per draw.
 * Normal: Marsaglia & Tsang's 128-layer ziggurat (2000) on 64-bit draws (layer,
   sign and 52-bit abscissa from disjoint bits), exact tail.
 """
@@ -31,8 +34,12 @@ _M2 = _U(0x94D049BB133111EB)
 _TO_UNIT = 1.0 / 9007199254740992.0  # 2**-53
 
 # Columns of the per-plane Poisson constants table.
-_LAM, _SLAM, _LOGLAM, _BIGL, _D, _OMEGA, _C0, _C1, _C2, _C3, _CHAT, _ENLAM = range(12)
+_LAM, _SLAM, _LOGLAM, _BIGL, _D, _OMEGA, _C0, _C1, _C2, _C3, _CHAT, _M = range(12)
 N_CONST = 12
+# Means up to this use the tabulated inversion, above it algorithm PD.
+TABLE_MAX_LAM = 500.0
+# Longest table: λ + 10√λ + 10 at λ = TABLE_MAX_LAM is 733.6.
+TABLE_LEN = 736
 _INV_SQRT_2PI = 0.3989422804014327
 
 
@@ -153,10 +160,17 @@ def _log_factorial(k):
 
 
 @njit(inline="always")
-def _poisson_constants(lam, c, p):
-    """Fill row ``p`` of ``c`` (n, N_CONST) with the sampler constants for mean ``lam``."""
+def _poisson_constants(lam, c, p, cdf, guide, table_max):
+    """
+    Prepare row ``p`` of ``c`` (n, N_CONST) to draw Poisson variates of mean ``lam``.
+
+    Means up to ``table_max`` get the cumulative distribution in ``cdf[p]`` and
+    its guide table in ``guide[p]`` (length ``c[p, _M]``); larger ones the
+    constants of algorithm PD.
+    """
     c[p, _LAM] = lam
-    if lam >= 10.0:
+    c[p, _M] = 0.0
+    if lam > table_max:
         slam = math.sqrt(lam)
         c[p, _SLAM] = slam
         c[p, _LOGLAM] = math.log(lam)
@@ -173,8 +187,26 @@ def _poisson_constants(lam, c, p):
         c[p, _C1] = b1 - 6.0 * b2 + 45.0 * c3
         c[p, _C0] = 1.0 - b1 + 3.0 * b2 - 15.0 * c3
         c[p, _CHAT] = 0.1069 / lam
-    else:
-        c[p, _ENLAM] = math.exp(-lam)
+    elif lam > 0.0:
+        m = min(int(lam + 10.0 * math.sqrt(lam) + 10.0), TABLE_LEN)
+        pk = math.exp(-lam)
+        total = 0.0
+        for k in range(m):
+            if k > 0:
+                pk *= lam / k
+            total += pk
+            cdf[p, k] = total
+        # Renormalise away the < 1e-20 tail beyond the table: cdf[m - 1] = 1 > any u.
+        for k in range(m):
+            cdf[p, k] /= total
+        cdf[p, m - 1] = 1.0
+        # guide[j] = smallest k with cdf[k] >= j / m: where the search for u in [j/m, (j+1)/m) starts.
+        k = 0
+        for j in range(m):
+            while cdf[p, k] < j / m:
+                k += 1
+            guide[p, j] = k
+        c[p, _M] = m
 
 
 @njit(inline="always")
@@ -190,27 +222,27 @@ def _pk_fk(c, p, k):
 
 
 @njit(inline="always")
-def _poisson(s, c, p):
+def _poisson(s, c, p, cdf, guide):
     """Exact Poisson variate with the constants in row ``p`` of ``c`` (`_poisson_constants`)."""
+    m = c[p, _M]
+    if m > 0.0:
+        # Inversion: the smallest k with cdf[k] >= u, searched from the guide entry.
+        u = _uniform(s)
+        k = guide[p, min(np.int64(u * m), np.int64(m) - 1)]
+        while cdf[p, k] < u:
+            k += 1
+        return np.float64(k)
     lam = c[p, _LAM]
-    if lam >= 10.0:
-        # Step N: normal sample; steps I and S: immediate and squeeze acceptance.
-        g = lam + c[p, _SLAM] * _normal(s)
-        u = _uniform(s)  # drawn even when step I accepts: one predictable branch
-        k = np.floor(g)
-        diff = lam - k
-        if (g >= 0.0) & ((k >= c[p, _BIGL]) | (c[p, _D] * u >= diff * diff * diff)):
-            return k
-        return _poisson_rare(s, c, p, g, u)
     if lam <= 0.0:
         return 0.0
-    enlam = c[p, _ENLAM]
-    k = 0.0
-    prod = _uniform(s)
-    while prod > enlam:
-        k += 1.0
-        prod *= _uniform(s)
-    return k
+    # Step N: normal sample; steps I and S: immediate and squeeze acceptance.
+    g = lam + c[p, _SLAM] * _normal(s)
+    u = _uniform(s)  # drawn even when step I accepts: one predictable branch
+    k = np.floor(g)
+    diff = lam - k
+    if (g >= 0.0) & ((k >= c[p, _BIGL]) | (c[p, _D] * u >= diff * diff * diff)):
+        return k
+    return _poisson_rare(s, c, p, g, u)
 
 
 @njit(cache=True)
@@ -268,29 +300,41 @@ def frames_kernel(lam, seg_start, seg_snap, plane, dither, inv_gain, sigma, key0
         state = np.empty(4, np.uint64)
         _seed(state, key0, key1, _U(first + i))
         const = np.zeros((n_planes, N_CONST))
+        cdf = np.empty((n_planes, TABLE_LEN))
+        guide = np.empty((n_planes, TABLE_LEN), np.int32)
         acc = np.zeros(n_planes, np.int64)
         for j in range(seg_snap.size):
             snap = seg_snap[j]
             for p in range(n_planes):
-                _poisson_constants(lam[snap, p, i], const, p)
+                _poisson_constants(lam[snap, p, i], const, p, cdf, guide, TABLE_MAX_LAM)
             for k in range(seg_start[j], seg_start[j + 1]):
                 p = plane[k]
-                x = _poisson(state, const, p) * inv_gain + sigma * _normal(state)
+                x = _poisson(state, const, p, cdf, guide) * inv_gain + sigma * _normal(state)
                 acc[p] += np.int64(math.floor(x + 0.5)) + dither[k]
         for p in range(n_planes):
             out[p, i] = acc[p]
 
 
 @njit(cache=True)
-def poisson_kernel(lam, key0, key1, index):
-    """Poisson variates of means ``lam`` (1-D) from stream ``index`` (for tests)."""
+def poisson_kernel(lam, key0, key1, index, table_max=TABLE_MAX_LAM):
+    """
+    Poisson variates of means ``lam`` (1-D) from stream ``index`` (for tests).
+
+    ``table_max`` moves the switch from tabulated inversion to algorithm PD
+    (PD is valid from λ = 10), so that both can be tested at any mean.
+    """
     state = np.empty(4, np.uint64)
     _seed(state, key0, key1, _U(index))
     c = np.zeros((1, N_CONST))
+    cdf = np.empty((1, TABLE_LEN))
+    guide = np.empty((1, TABLE_LEN), np.int32)
     out = np.empty(lam.size)
+    previous = -1.0
     for i in range(lam.size):
-        _poisson_constants(lam[i], c, 0)
-        out[i] = _poisson(state, c, 0)
+        if lam[i] != previous:
+            _poisson_constants(lam[i], c, 0, cdf, guide, max(table_max, 10.0))
+            previous = lam[i]
+        out[i] = _poisson(state, c, 0, cdf, guide)
     return out
 
 
