@@ -1,22 +1,22 @@
 """
 Numba kernels of the frame-by-frame camera engine (private).
 
-Random numbers come from a counter-free but *per-pixel* stream: pixel ``i``
-(its index in the full detector, row-major) gets its own xoshiro256** state,
-seeded by SplitMix64 hashing of (seed key, i).  A pixel's numbers therefore do
-not depend on which chunk or thread processes it, and a pixel is always
-processed by one thread from its first frame to its last.
+Random numbers come from one stream per pixel: pixel ``i`` (its index in the
+full detector, row-major) gets its own xoshiro256** state, seeded by SplitMix64
+hashing of (seed key, i).  A pixel's numbers therefore do not depend on which
+chunk or thread processes it, and a pixel is always processed by one thread
+from its first frame to its last.
 
 Samplers:
 
-* Poisson: Ahrens & Dieter's algorithm PD (1982, ACM TOMS 8, 163; the one R
-  uses) for λ ≥ 10: a normal deviate rounded down is accepted at once or after
-  a cubic squeeze in ~99 % of cases at λ ~ 1e4, the rest is corrected exactly
-  against the Poisson probabilities (log k! by its Stirling series, |error|
-  < 1e-12, for k ≥ 9) above λ = 500; below, inversion of the cumulative
-  distribution tabulated once per pixel and plane (to λ + 10√λ + 10, where the
-  tail beyond holds < 1e-20, renormalised) with a guide table: one uniform and
-  one or two comparisons per draw.
+* Poisson, mean λ ≤ 500: inversion of the cumulative distribution, tabulated
+  once per pixel and plane up to λ + 10√λ + 10 (the tail beyond holds
+  < 1e-19 and is renormalised away), searched from a guide table: one uniform
+  and one or two comparisons per draw.
+* Poisson, λ > 500: Ahrens & Dieter's algorithm PD (1982, ACM TOMS 8, 163; the
+  one R uses): a normal deviate rounded down is accepted at once or after a
+  cubic squeeze in > 99 % of cases, the rest is corrected exactly against the
+  Poisson probabilities (log k! by its Stirling series, |error| < 1e-12).
 * Normal: Marsaglia & Tsang's 128-layer ziggurat (2000) on 64-bit draws (layer,
   sign and 52-bit abscissa from disjoint bits), exact tail.
 """
