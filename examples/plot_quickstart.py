@@ -11,7 +11,6 @@ and the GONG reduction — and returns sunpy Maps.
 # Three lines: import, simulate, plot.  ``detector_shape=256`` keeps this
 # example quick (the default is GONG's full 860 × 860 detector), and the
 # 10-minute accumulation of the paper is the default duration.
-import astropy.units as u
 import matplotlib.pyplot as plt
 
 import gongsynth

@@ -38,7 +38,7 @@ import sunpy.map
 from astropy.coordinates import SkyCoord
 from sunpy.coordinates import frames
 
-from .instrument import GONGInstrument
+from .instrument import resolve_instrument
 from .observations import BadHeaderWarning, load_observation
 from .statistics import _disk_values, _histogram  # one disk mask for both histograms
 from .statistics import (
@@ -74,14 +74,6 @@ AUTO_DEGRADE_FRACTION = 0.8
 
 # Display range of magnetograms in the figure (the paper's Fig. 1: ±150 G).
 _DISPLAY_LIMIT = 150
-
-
-def _instrument(instrument):
-    if instrument is None:
-        return GONGInstrument()
-    if not isinstance(instrument, GONGInstrument):
-        raise TypeError(f"instrument must be a GONGInstrument or None, got {type(instrument).__name__}")
-    return instrument
 
 
 def _check_map(smap, name):
@@ -257,7 +249,7 @@ def degrade_to_gong(smap, instrument=None, *, psf=None, native_fwhm=None, min_co
     ((20, 20), <Quantity 2.5 arcsec / pix>, 1.0)
     """
     _check_map(smap, "smap")
-    inst = _instrument(instrument)
+    inst = resolve_instrument(instrument)
     min_coverage = float(min_coverage)
     if not 0 < min_coverage <= 1:
         raise ValueError(f"min_coverage must lie in (0, 1], got {min_coverage}")
@@ -403,7 +395,7 @@ def summarize_map(smap, label, *, instrument=None, degrade="auto", noise_box=60 
     _check_map(smap, label)
     if smap.unit is None or not smap.unit.is_equivalent(u.G):
         raise ValueError(f"{label}: expected a magnetogram in gauss, got unit {smap.unit}")
-    inst = _instrument(instrument)
+    inst = resolve_instrument(instrument)
     if degrade not in ("auto", True, False):
         raise ValueError(f"degrade must be 'auto', True or False, got {degrade!r}")
     scale = local_pixel_scale(smap)
@@ -553,28 +545,10 @@ def _plot(report, fig):
     ax.set_title(f"noise in {report.sim.noise.box_size.to_value(u.arcsec):.0f}″ boxes", fontsize=9)
     ax.legend(fontsize=7)
 
-    ax = fig.add_subplot(2, 3, 4)
-    for key, summ in (("sim", report.sim), ("obs", report.obs)):
-        h = summ.histogram
-        ax.stairs(np.where(h.density.value > 0, h.density.value, np.nan), h.edges.to_value(u.G),
-                  color=colours[key], label=summ.label)
-    ax.set_yscale("log")
-    ax.set_xlabel("B_LOS [G]")
-    ax.set_ylabel("probability density [1/G]")
-    ax.set_title("on-disk histogram", fontsize=9)
-    ax.legend(fontsize=8)
-
-    ax = fig.add_subplot(2, 3, 5)
-    for key, summ in (("sim", report.sim), ("obs", report.obs)):
-        h = summ.abs_histogram
-        ax.stairs(np.where(h.density.value > 0, h.density.value, np.nan), h.edges.to_value(u.G),
-                  color=colours[key], label=summ.label)
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel("|B_LOS| [G]")
-    ax.set_ylabel("probability density [1/G]")
-    ax.set_title("on-disk |B| histogram", fontsize=9)
-    ax.legend(fontsize=8)
+    _plot_histograms(fig.add_subplot(2, 3, 4), report, colours, "histogram", "B_LOS [G]",
+                     "on-disk histogram")
+    _plot_histograms(fig.add_subplot(2, 3, 5), report, colours, "abs_histogram", "|B_LOS| [G]",
+                     "on-disk |B| histogram", log_x=True)
 
     ax = fig.add_subplot(2, 3, 6)
     ax.axis("off")
@@ -781,7 +755,7 @@ def compare_limb_darkening(sim_map, obs_map, *, instrument=None, degrade="auto",
         raise ValueError(f"labels must be two strings, got {labels!r}")
     if degrade not in ("auto", True, False):
         raise ValueError(f"degrade must be 'auto', True or False, got {degrade!r}")
-    inst = _instrument(instrument)
+    inst = resolve_instrument(instrument)
     profiles = []
     for smap, name in ((sim_map, "sim_map"), (obs_map, "obs_map")):
         _check_map(smap, name)
@@ -816,3 +790,18 @@ def compare_limb_darkening(sim_map, obs_map, *, instrument=None, degrade="auto",
         bottom.set_ylabel("difference")
         result.figure = fig
     return result
+
+
+def _plot_histograms(ax, report, colours, attribute, xlabel, title, *, log_x=False):
+    """Histograms (``attribute`` of each map summary) of both maps on log axes."""
+    for key, summ in (("sim", report.sim), ("obs", report.obs)):
+        h = getattr(summ, attribute)
+        ax.stairs(np.where(h.density.value > 0, h.density.value, np.nan), h.edges.to_value(u.G),
+                  color=colours[key], label=summ.label)
+    if log_x:
+        ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel("probability density [1/G]")
+    ax.set_title(title, fontsize=9)
+    ax.legend(fontsize=8)

@@ -29,7 +29,7 @@ import math
 import astropy.units as u
 import numpy as np
 
-from .instrument import GONGInstrument
+from .instrument import resolve_instrument
 from .planes import N_CHANNELS
 from .validation import check_quantity, check_wavelength_grid
 
@@ -45,14 +45,6 @@ __all__ = [
     "reference_phase",
 ]
 
-
-
-def _instrument(instrument):
-    if instrument is None:
-        return GONGInstrument()
-    if not isinstance(instrument, GONGInstrument):
-        raise TypeError(f"instrument must be a GONGInstrument or None, got {type(instrument).__name__}")
-    return instrument
 
 
 def _nm(wavelength, name="wavelength"):
@@ -82,7 +74,7 @@ def prefilter_transmission(wavelength: u.nm, instrument=None):
     >>> float(prefilter_transmission(676.78 * u.nm))
     1.0
     """
-    inst = _instrument(instrument)
+    inst = resolve_instrument(instrument)
     x = _nm(wavelength) - inst.prefilter_center.to_value(u.nm)
     w = inst.prefilter_fwhm.to_value(u.nm)
     if inst.prefilter_form == "memo":
@@ -116,7 +108,7 @@ def lyot_transmission(wavelength: u.nm, instrument=None):
     >>> round(float(lyot_transmission(676.78 * u.nm)), 2)
     0.99
     """
-    inst = _instrument(instrument)
+    inst = resolve_instrument(instrument)
     lam = _nm(wavelength)
     dh = inst.lyot_delta_h.to_value(u.nm)
     angles = [inst.lyot_angle_1, inst.lyot_angle_2, inst.lyot_angle_3]
@@ -145,7 +137,7 @@ def michelson_phase(wavelength: u.nm, instrument=None):
     `~astropy.units.Quantity`
         In radians (not wrapped).
     """
-    inst = _instrument(instrument)
+    inst = resolve_instrument(instrument)
     lam0 = inst.line_wavelength.to_value(u.nm)
     fsr = inst.michelson_fsr.to_value(u.nm)
     return u.Quantity(2 * math.pi * lam0**2 / (fsr * _nm(wavelength)), u.rad)
@@ -162,7 +154,7 @@ def modulation_amplitude(instrument=None):
     -------
     float
     """
-    inst = _instrument(instrument)
+    inst = resolve_instrument(instrument)
     half_sweep = 2 * inst.waveplate_step.to_value(u.rad)  # half of the 4Δθ sweep
     return math.sin(half_sweep) / half_sweep
 
@@ -185,7 +177,7 @@ def waveplate_transmission(wavelength: u.nm, angle: u.deg, instrument=None):
     `~astropy.units.Quantity`
         Dimensionless, broadcast shape.
     """
-    inst = _instrument(instrument)
+    inst = resolve_instrument(instrument)
     envelope = (prefilter_transmission(wavelength, inst) * lyot_transmission(wavelength, inst)).value
     arg = (michelson_phase(wavelength, inst).value / 2 + inst.michelson_angle.to_value(u.rad)
            - 2 * angle.to_value(u.rad))
@@ -236,7 +228,7 @@ def channel_responses(wavelength: u.nm, instrument=None):
     lam = np.atleast_1d(_nm(wavelength))
     if lam.ndim != 1:
         raise ValueError(f"wavelength must be one-dimensional, got shape {lam.shape}")
-    return u.Quantity(_sector_responses(lam, _instrument(instrument)), u.one)
+    return u.Quantity(_sector_responses(lam, resolve_instrument(instrument)), u.one)
 
 
 @functools.lru_cache(maxsize=32)
@@ -284,7 +276,7 @@ def channel_weights(wavelength: u.nm, instrument=None):
     >>> w.shape, w.unit
     ((3, 51), Unit("nm"))
     """
-    inst = _instrument(instrument)
+    inst = resolve_instrument(instrument)
     lam = check_wavelength_grid(wavelength, inst.line_wavelength, "wavelength").to_value(u.nm)
     grid, dlam, resp = _quadrature(inst)
     # Hat-function interpolation weights of every fine point onto the input grid.
@@ -352,4 +344,4 @@ def reference_phase(instrument=None):
     `~astropy.units.Quantity`
         In radians, within (-π, π].
     """
-    return _reference_phase(_instrument(instrument)) * u.rad
+    return _reference_phase(resolve_instrument(instrument)) * u.rad

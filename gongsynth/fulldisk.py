@@ -33,7 +33,7 @@ import astropy.units as u
 import numpy as np
 from astropy.coordinates import SkyCoord
 
-from .filters import _instrument
+from .instrument import resolve_instrument
 from .planes import N_PLANES
 from .scene import Scene, _obstime, radiance_at_earth, sky_grid, wcs_header
 from .validation import check_quantity
@@ -274,7 +274,7 @@ def full_disk_scene(source, *, obstime=None, instrument=None, detector_shape=Non
     ((6, 24, 24), True)
     """
     from .photosphere import Photosphere
-    inst = _instrument(instrument)
+    inst = resolve_instrument(instrument)
     if supersampling is None:
         supersampling = inst.supersampling
     if isinstance(supersampling, bool) or not isinstance(supersampling, (int, np.integer)) \

@@ -21,7 +21,7 @@ import astropy.units as u
 
 from .tomlfmt import toml_value
 
-__all__ = ["GONGInstrument", "PREFILTER_FORMS"]
+__all__ = ["GONGInstrument", "PREFILTER_FORMS", "resolve_instrument"]
 
 #: Accepted values of `GONGInstrument.prefilter_form`.
 PREFILTER_FORMS = ("memo", "ideal")
@@ -385,6 +385,35 @@ class GONGInstrument:
                 raise KeyError(f"unknown top-level key(s) {extra} next to [instrument]")
             table = table["instrument"]
         return cls.from_dict(table)
+
+
+def resolve_instrument(instrument):
+    """
+    The instrument a stage should use: the default GONG for None, else the one given.
+
+    Parameters
+    ----------
+    instrument : `GONGInstrument` or None
+
+    Returns
+    -------
+    `GONGInstrument`
+
+    Raises
+    ------
+    TypeError
+        If ``instrument`` is neither None nor a `GONGInstrument`.
+
+    Examples
+    --------
+    >>> resolve_instrument(None) == GONGInstrument()
+    True
+    """
+    if instrument is None:
+        return GONGInstrument()
+    if not isinstance(instrument, GONGInstrument):
+        raise TypeError(f"instrument must be a GONGInstrument or None, got {type(instrument).__name__}")
+    return instrument
 
 
 def _as_quantity(name, value, unit):

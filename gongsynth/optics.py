@@ -39,7 +39,7 @@ import scipy.interpolate
 import scipy.sparse
 import scipy.special
 
-from .filters import _instrument
+from .instrument import resolve_instrument
 from .validation import check_finite, check_quantity
 
 __all__ = [
@@ -133,7 +133,7 @@ def psf_profile(radius: u.arcsec, instrument=None):
     >>> bool(p[1] < 1e-4 * p[0])   # first Airy zero at 1.22 λ/D
     True
     """
-    inst = _instrument(instrument)
+    inst = resolve_instrument(instrument)
     r = np.abs(radius.to_value(u.arcsec))
     check_finite(r, "radius")
     return u.Quantity(_profile(r, inst), u.arcsec**-2)
@@ -189,7 +189,7 @@ def psf_kernel(pixel_scale: u.arcsec, instrument=None, *, shape=None):
     >>> k.shape, round(float(k.sum()), 12)
     ((65, 65), 1.0)
     """
-    inst = _instrument(instrument)
+    inst = resolve_instrument(instrument)
     scale = float(pixel_scale.to_value(u.arcsec))
     if not (math.isfinite(scale) and scale > 0):
         raise ValueError(f"pixel_scale must be positive and finite, got {pixel_scale}")
@@ -471,7 +471,7 @@ def pixelize(stack, pixel_scale: u.arcsec, *, instrument=None, periodic=False, m
     >>> pixelize(img, 0.5 * u.arcsec).shape   # 5 arcsec field -> 2 x 2 GONG pixels
     (2, 2)
     """
-    inst = _instrument(instrument)
+    inst = resolve_instrument(instrument)
     if method not in PIXELIZE_METHODS:
         raise ValueError(f"method must be one of {PIXELIZE_METHODS}, got {method!r}")
     values, unit = _split_unit(stack, "stack")
@@ -531,7 +531,7 @@ def observe(stack, pixel_scale: u.arcsec, *, instrument=None, psf=None, boundary
     >>> out.shape, bool(np.allclose(out, 1))
     ((2, 10, 10), True)
     """
-    inst = _instrument(instrument)
+    inst = resolve_instrument(instrument)
     kernel = _resolve_kernel(psf, pixel_scale.to_value(u.arcsec), inst)
     periodic = boundary == "periodic"
     if kernel is None:
@@ -568,7 +568,7 @@ def photometric_factor(instrument=None):
     >>> f.unit == u.electron / (u.erg / (u.s * u.cm**2 * u.arcsec**2))
     True
     """
-    inst = _instrument(instrument)
+    inst = resolve_instrument(instrument)
     photon = (const.h * const.c / inst.line_wavelength).to(u.erg)
     factor = (inst.plate_scale**2 * inst.effective_area * inst.exposure_time
               * inst.quantum_efficiency / photon)
@@ -609,7 +609,7 @@ def expected_counts(scene, instrument=None, *, psf=None, workers=None):
     >>> e.shape, e.unit
     ((6, 4, 4), Unit("electron"))
     """
-    inst = _instrument(instrument if instrument is not None else getattr(scene, "instrument", None))
+    inst = resolve_instrument(instrument if instrument is not None else getattr(scene, "instrument", None))
     radiance = check_quantity(scene.data, u.erg / (u.s * u.cm**2 * u.arcsec**2), "scene.data")
     planes = observe(radiance, scene.pixel_scale, instrument=inst, psf=psf,
                      boundary=scene.boundary, workers=workers)

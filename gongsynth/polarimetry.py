@@ -23,7 +23,8 @@ analyser; the effective area (0.6 cm², tuned to real GONG counts) absorbs it.
 import astropy.units as u
 import numpy as np
 
-from .filters import _instrument, channel_weights
+from .filters import channel_weights
+from .instrument import resolve_instrument
 from .planes import N_CHANNELS, N_PLANES, N_POLARISATIONS
 from .validation import check_finite
 
@@ -188,7 +189,7 @@ def channel_images(stokes, *, mueller=None, instrument=None):
     >>> planes.shape, planes.unit
     ((6, 2, 3), Unit("erg / (s sr cm2)"))
     """
-    inst = _instrument(instrument)
+    inst = resolve_instrument(instrument)
     coeff, kind = _coefficients_for(stokes, mueller)
     weights = channel_weights(stokes.wavelength, inst).to_value(u.cm)  # (3, nλ)
     ny, nx, nl = stokes.shape

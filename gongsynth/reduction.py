@@ -28,7 +28,7 @@ import astropy.units as u
 import numpy as np
 
 from .filters import measured_phase, reference_phase
-from .instrument import GONGInstrument
+from .instrument import resolve_instrument
 from .planes import N_CHANNELS, N_PLANES
 from .validation import check_finite, check_quantity
 
@@ -64,14 +64,6 @@ class Observables:
     velocity: u.Quantity
     phase: u.Quantity
     wrapped: np.ndarray
-
-
-def _instrument(instrument):
-    if instrument is None:
-        return GONGInstrument()
-    if not isinstance(instrument, GONGInstrument):
-        raise TypeError(f"instrument must be a GONGInstrument or None, got {type(instrument).__name__}")
-    return instrument
 
 
 def _planes(raw):
@@ -141,7 +133,7 @@ def subtract_dark(planes, dark, frames_per_plane, instrument=None):
     `numpy.ndarray`
         Dark-subtracted planes, DN.
     """
-    inst = _instrument(instrument)
+    inst = resolve_instrument(instrument)
     check_quantity(dark, u.electron, "dark")
     check_finite(dark, "dark")
     dark_dn = (dark / inst.gain).to_value(u.adu) / 2**inst.truncate_bits
@@ -184,7 +176,7 @@ def phase_to_velocity(phase, instrument=None):
     `~astropy.units.Quantity`
         m/s; positive for a redshift (the Michelson phase falls with wavelength).
     """
-    inst = _instrument(instrument)
+    inst = resolve_instrument(instrument)
     phase = u.Quantity(phase, u.rad).value
     delta = np.angle(np.exp(1j * (reference_phase(inst).value - phase)))
     return (inst.v0 * delta * u.rad).to(u.m / u.s)
@@ -233,7 +225,7 @@ def reduce(raw, instrument=None, dark=None, flat=None, *, frames_per_plane=None,
     >>> abs(obs.doppler.to_value(u.m / u.s)) < 0.5, float(obs.magnetogram.to_value(u.G))
     (np.True_, 0.0)
     """
-    inst = _instrument(instrument)
+    inst = resolve_instrument(instrument)
     planes = _planes(raw)
     # A RawPlanes carries what the camera used; a plain array (which has its
     # own unrelated ``.flat``) carries nothing.

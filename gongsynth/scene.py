@@ -37,7 +37,7 @@ import scipy.sparse
 from astropy.coordinates import SkyCoord
 from astropy.time import Time
 
-from .filters import _instrument
+from .instrument import resolve_instrument
 from .planes import N_PLANES
 from .validation import check_finite, check_quantity
 
@@ -121,7 +121,7 @@ class Scene:
         self.pixel_scale = pixel_scale.to(u.arcsec)
         self.header = header
         self.boundary = boundary
-        self.instrument = _instrument(instrument)
+        self.instrument = resolve_instrument(instrument)
         if detector_shape is None:
             ratio = (self.pixel_scale / self.instrument.plate_scale).to_value(u.one)
             detector_shape = tuple(int(round(n * ratio)) for n in data.shape[-2:])
@@ -368,7 +368,7 @@ def sky_grid(instrument=None, *, detector_shape=None, shape=None):
     >>> sky_grid(detector_shape=64)[:2]
     ((320, 320), <Quantity 0.5 arcsec>)
     """
-    inst = _instrument(instrument)
+    inst = resolve_instrument(instrument)
     det = _pair(inst.detector_shape if detector_shape is None else detector_shape, "detector_shape")
     grid = (tuple(n * inst.supersampling for n in det) if shape is None
             else _pair(shape, "shape"))
@@ -409,7 +409,7 @@ def wcs_header(shape, pixel_scale, centre, instrument=None):
     (100.5, 0.5, 'HPLT-TAN')
     """
     import sunpy.map
-    inst = _instrument(instrument)
+    inst = resolve_instrument(instrument)
     ny, nx = shape
     scale = pixel_scale.to_value(u.arcsec)
     return sunpy.map.make_fitswcs_header(
@@ -548,7 +548,7 @@ def tile(stack, pixel_size: u.km, *, latitude: u.deg = 0 * u.deg, resolutions=(1
     if values.ndim != 3:
         raise ValueError(f"stack must have shape (k, ny, nx) or (ny, nx), got {np.shape(stack)}")
     check_finite(values, "stack")
-    inst = _instrument(instrument)
+    inst = resolve_instrument(instrument)
     res = _check_resolutions(resolutions)
     grid, scale, det = sky_grid(inst, detector_shape=detector_shape, shape=shape)
     mu, _ = viewing_geometry(lat * u.deg, obstime)
@@ -610,7 +610,7 @@ def tiled_scenes(channels, blos, pixel_size: u.km, *, latitude: u.deg = 0 * u.de
     ((6, 160, 160), (160, 160), (32, 32))
     """
     from .polarimetry import CHANNEL_UNIT
-    inst = _instrument(instrument)
+    inst = resolve_instrument(instrument)
     lat = _latitude_deg(latitude)
     check_quantity(channels, CHANNEL_UNIT, "channels")
     if channels.ndim != 3 or channels.shape[0] != N_PLANES:
@@ -697,7 +697,7 @@ def tiled_scene(stokes, *, latitude: u.deg = 0 * u.deg, resolutions=(1, 2, 4, 8)
             f"stokes was synthesised at mu = {float(stokes.mu):.4g} but latitude {lat:g} deg is "
             f"seen at mu = {mu:.4g}: synthesise it at that mu (los_azimuth {los_azimuth:g})"
         )
-    inst = _instrument(instrument)
+    inst = resolve_instrument(instrument)
     planes = channel_images(stokes, mueller=mueller, instrument=inst)
     light, _ = tiled_scenes(planes, stokes.blos, stokes.pixel_size, latitude=lat * u.deg,
                             resolutions=resolutions, obstime=obstime, instrument=inst,
