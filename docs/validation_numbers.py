@@ -269,7 +269,8 @@ def _mdi_noise():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         noise = noise_estimate(load_observation(path))
-    return f"quietest 60″ box: std {noise.std.to_value(u.G):.1f} G, robust σ {noise.sigma.to_value(u.G):.1f} G"
+    return (f"quietest 60″ box: std {noise.std.to_value(u.G):.1f} G, "
+            f"robust σ {noise.sigma.to_value(u.G):.1f} G")
 
 
 def _schedule():
