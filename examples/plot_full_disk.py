@@ -1,7 +1,7 @@
 """
-=============================
+==============================
 A synthetic full-disk GONG map
-=============================
+==============================
 
 The paper avoided mapping its simulation onto the sphere.  `gongsynth.fulldisk`
 does it: every supersampled point of GONG's 860 × 860 field is traced to the

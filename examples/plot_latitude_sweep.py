@@ -1,7 +1,7 @@
 """
-==========================================
+==========================================================
 A latitude sweep on Dask, and calibration vs viewing angle
-==========================================
+==========================================================
 
 The paper runs its simulator at six viewing angles: 0, 25, 45, 60, 70 and
 75°.  `gongsynth.simulate_many` runs such a sweep in parallel on Dask and

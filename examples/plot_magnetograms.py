@@ -1,7 +1,7 @@
 """
-=================================================
+====================================================================
 Magnetograms at disk centre and at 60° (the paper's Figs. 11 and 12)
-=================================================
+====================================================================
 
 The paper simulates the same MURaM tile at six viewing angles, each as its own
 image.  Here the built-in photosphere is seen at latitude 0° and 60° on the

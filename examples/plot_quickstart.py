@@ -1,7 +1,7 @@
 """
-=====================================
+==============================================
 Quick start: a GONG magnetogram in three lines
-=====================================
+==============================================
 
 `gongsynth.simulate` runs the whole chain — the built-in model photosphere,
 Milne–Eddington spectra of Ni I 676.8 nm, GONG's filters, optics and camera

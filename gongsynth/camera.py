@@ -44,7 +44,6 @@ holds n_snap snapshots spread evenly over the duration; frame *k* sees
 snapshot ⌊k·n_snap/N⌋.
 """
 import os
-import tempfile
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
@@ -53,7 +52,8 @@ import numpy as np
 from astropy.io import fits
 
 from .detector import normalise_flat, prepare_dark, synthetic_dark, synthetic_flat
-from .instrument import GONGInstrument
+from .atomic import atomic_path
+from .instrument import resolve_instrument
 from .planes import N_PLANES, PLANE_NAMES
 from .schedule import frame_schedule
 from .seeding import as_seed_sequence, child_sequence, stage_generator
@@ -67,14 +67,6 @@ ENGINES = ("frames", "blocks")
 # Pixels per progress-bar step of the frames engine (bounded memory per chunk).
 _FRAMES_CHUNK_PIXELS = 1 << 15
 _BLOCKS_CHUNK_PIXELS = 1 << 17
-
-
-def _instrument(instrument):
-    if instrument is None:
-        return GONGInstrument()
-    if not isinstance(instrument, GONGInstrument):
-        raise TypeError(f"instrument must be a GONGInstrument or None, got {type(instrument).__name__}")
-    return instrument
 
 
 @dataclass(eq=False)
@@ -137,9 +129,6 @@ class RawPlanes:
         FileExistsError
             If ``path`` exists and ``overwrite`` is False.
         """
-        path = os.fspath(path)
-        if os.path.exists(path) and not overwrite:
-            raise FileExistsError(f"{path!r} exists; pass overwrite=True to replace it")
         flat = self.flat[0] if _same_planes(self.flat) else self.flat
         dark_hdu = fits.ImageHDU(np.ascontiguousarray(self.dark.to_value(u.electron)), name="DARK")
         dark_hdu.header["BUNIT"] = ("electron", "dark current per frame")
@@ -148,16 +137,8 @@ class RawPlanes:
             fits.ImageHDU(np.ascontiguousarray(flat), name="FLAT"),
             dark_hdu,
         ])
-        directory = os.path.dirname(os.path.abspath(path))
-        fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".fits", dir=directory)
-        os.close(fd)
-        try:
+        with atomic_path(path, overwrite=overwrite) as tmp:
             hdul.writeto(tmp, overwrite=True)
-            os.replace(tmp, path)
-        except BaseException:
-            if os.path.exists(tmp):
-                os.remove(tmp)
-            raise
 
     @classmethod
     def from_fits(cls, path):
@@ -316,7 +297,7 @@ def integrate(expected, *, duration=10 * u.min, engine="blocks", seed=None, inst
     >>> bool(np.all(np.abs(raw.data / expected_dn - 1) < 1e-3))
     True
     """
-    inst = _instrument(instrument)
+    inst = resolve_instrument(instrument)
     if engine not in ENGINES:
         raise ValueError(f"engine must be one of {ENGINES}, got {engine!r}")
     values = _check_expected(expected)

@@ -215,7 +215,7 @@ class GONGInstrument:
         Returns
         -------
         `~astropy.units.Quantity`
-            In m / s / rad (2150.4 for the defaults; the paper's 2151.86 used
+            In m / s / rad (2150.27 for the defaults; the paper's 2151.86 used
             c = 3e8 m/s).
         """
         v = const.c * self.michelson_fsr / (2 * math.pi * self.line_wavelength)

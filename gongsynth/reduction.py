@@ -27,13 +27,13 @@ from dataclasses import dataclass
 import astropy.units as u
 import numpy as np
 
+from .detector import normalise_flat
 from .filters import measured_phase, reference_phase
 from .instrument import resolve_instrument
 from .planes import N_CHANNELS, N_PLANES
 from .validation import check_finite, check_quantity
 
-__all__ = ["Observables", "reduce", "subtract_dark", "divide_flat", "normalise_flat",
-           "phase_to_velocity"]
+__all__ = ["Observables", "reduce", "subtract_dark", "divide_flat", "phase_to_velocity"]
 
 
 @dataclass(frozen=True)
@@ -78,39 +78,6 @@ def _planes(raw):
     return check_finite(data, "raw")
 
 
-def normalise_flat(flat, shape):
-    """
-    Divide a flat field by its median, per plane if it has one per plane.
-
-    Parameters
-    ----------
-    flat : array_like
-        Shape ``shape`` (one flat per plane) or ``shape[1:]`` (one for all).
-    shape : tuple
-        Shape of the planes array, (6, ...).
-
-    Returns
-    -------
-    `numpy.ndarray`
-        The normalised flat, broadcastable to ``shape``.
-
-    Examples
-    --------
-    >>> normalise_flat([[1.0, 2.0, 3.0]], (6, 1, 3)).tolist()
-    [[0.5, 1.0, 1.5]]
-    """
-    flat = np.asarray(getattr(flat, "value", flat), dtype=float)
-    if flat.shape not in (tuple(shape), tuple(shape[1:])):
-        raise ValueError(f"flat must have shape {tuple(shape)} or {tuple(shape[1:])}, got {flat.shape}")
-    check_finite(flat, "flat")
-    if np.any(flat <= 0):
-        raise ValueError("flat must be strictly positive everywhere (it divides the data)")
-    if flat.shape == tuple(shape):
-        axes = tuple(range(1, flat.ndim))
-        return flat / np.median(flat, axis=axes, keepdims=True)
-    return flat / np.median(flat)
-
-
 def subtract_dark(planes, dark, frames_per_plane, instrument=None):
     """
     Subtract the accumulated dark current from raw planes.
@@ -152,13 +119,20 @@ def _frames(frames_per_plane, ndim):
 
 def divide_flat(planes, flat):
     """
-    Divide planes by a median-normalised flat (see `normalise_flat`).
+    Divide planes by a median-normalised flat (`gongsynth.detector.normalise_flat`).
+
+    Parameters
+    ----------
+    planes : `numpy.ndarray`
+        Shape (6, ny, nx).
+    flat : array_like or path-like
+        (ny, nx) or (6, ny, nx), as given to the camera.
 
     Returns
     -------
     `numpy.ndarray`
     """
-    return planes / normalise_flat(flat, planes.shape)
+    return planes / normalise_flat(flat, planes.shape[1:])
 
 
 def phase_to_velocity(phase, instrument=None):

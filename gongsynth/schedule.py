@@ -22,19 +22,11 @@ from dataclasses import dataclass
 import astropy.units as u
 import numpy as np
 
-from .instrument import GONGInstrument
+from .instrument import GONGInstrument, resolve_instrument
 from .planes import N_CHANNELS, N_PLANES, N_POLARISATIONS
 from .validation import check_finite, check_quantity
 
 __all__ = ["FrameSchedule", "frame_schedule", "dither_sequence", "n_frames_in"]
-
-
-def _instrument(instrument):
-    if instrument is None:
-        return GONGInstrument()
-    if not isinstance(instrument, GONGInstrument):
-        raise TypeError(f"instrument must be a GONGInstrument or None, got {type(instrument).__name__}")
-    return instrument
 
 
 def _whole(value, what):
@@ -65,7 +57,7 @@ def n_frames_in(duration, instrument=None):
     >>> n_frames_in(10 * u.min)
     36000
     """
-    inst = _instrument(instrument)
+    inst = resolve_instrument(instrument)
     check_quantity(duration, u.s, "duration")
     if np.ndim(duration) != 0:
         raise ValueError(f"duration must be a scalar, got shape {np.shape(duration)}")
@@ -99,7 +91,7 @@ def dither_sequence(n_frames, instrument=None):
     >>> int(d[0]), int(d[12]), int(d.max()), int(d[-1]), float(d.mean())
     (34, 36, 332, 32, 182.0)
     """
-    inst = _instrument(instrument)
+    inst = resolve_instrument(instrument)
     if isinstance(n_frames, bool) or not isinstance(n_frames, (int, np.integer)) or n_frames < 0:
         raise ValueError(f"n_frames must be a non-negative int, got {n_frames!r}")
     if inst.dither_interval < 1 or inst.dither_cycle < 1:
@@ -231,7 +223,7 @@ def frame_schedule(duration=1 * u.min, instrument=None):
     >>> float(s.dither.mean().value)
     182.0
     """
-    inst = _instrument(instrument)
+    inst = resolve_instrument(instrument)
     n = n_frames_in(duration, inst)
     if inst.frames_per_sector_cycle != N_CHANNELS:
         raise ValueError(
