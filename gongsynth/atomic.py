@@ -27,6 +27,17 @@ def check_writable(paths, overwrite):
     ------
     FileExistsError
         Naming every file that would be overwritten.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> existing = pathlib.Path(tempfile.mkdtemp()) / "m.fits"
+    >>> _ = existing.write_bytes(b"")
+    >>> check_writable([existing], overwrite=True)   # allowed
+    >>> check_writable([existing], overwrite=False)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    FileExistsError: refusing to overwrite existing file(s) [...]; pass overwrite=True ...
     """
     existing = [str(p) for p in map(Path, paths) if p.exists()]
     if existing and not overwrite:

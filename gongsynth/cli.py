@@ -32,6 +32,11 @@ def build_parser():
     Returns
     -------
     `argparse.ArgumentParser`
+
+    Examples
+    --------
+    >>> build_parser().parse_args(["simulate", "--latitude", "60", "--out", "run"]).latitude
+    [60.0]
     """
     parser = argparse.ArgumentParser(
         prog="gongsynth",
@@ -143,6 +148,13 @@ def main(argv=None):
     -------
     int
         The exit code.
+
+    Examples
+    --------
+    >>> main(["config", "--print-defaults"])  # doctest: +ELLIPSIS
+    # gongsynth run configuration
+    ...
+    0
     """
     parser = build_parser()
     args = parser.parse_args(argv)

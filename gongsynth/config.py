@@ -141,6 +141,13 @@ class SimulationConfig:
         ``seed=None`` draws fresh entropy, reduced to a 63-bit int so that it
         fits a FITS header and the run can be repeated from the saved config.
 
+        Parameters
+        ----------
+        seed : None, int, `numpy.random.SeedSequence` or `numpy.random.Generator`
+        instrument : `~gongsynth.GONGInstrument`, optional
+        **kwargs
+            The other fields.
+
         Returns
         -------
         `SimulationConfig`
@@ -159,7 +166,18 @@ class SimulationConfig:
         return self.instrument.detector_shape if self.detector_shape is None else self.detector_shape
 
     def replace(self, **changes):
-        """Return a copy with some fields changed (validated again)."""
+        """
+        Return a copy with some fields changed (validated again).
+
+        Parameters
+        ----------
+        **changes
+            Field names and new values.
+
+        Returns
+        -------
+        `SimulationConfig`
+        """
         return dataclasses.replace(self, **changes)
 
     def simulation_arguments(self):

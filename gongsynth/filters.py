@@ -136,6 +136,13 @@ def michelson_phase(wavelength: u.nm, instrument=None):
     -------
     `~astropy.units.Quantity`
         In radians (not wrapped).
+
+    Examples
+    --------
+    >>> import astropy.units as u
+    >>> step = michelson_phase(676.78 * u.nm) - michelson_phase(676.78 * u.nm + 0.305 * u.AA)
+    >>> round(float(step.to_value(u.rad)), 3)   # one free spectral range = one cycle
+    6.283
     """
     inst = resolve_instrument(instrument)
     lam0 = inst.line_wavelength.to_value(u.nm)
@@ -150,13 +157,24 @@ def modulation_amplitude(instrument=None):
     For a sector of width Δθ_w the 2θ_w term sweeps 4Δθ_w of modulation phase,
     so the average contrast is sinc(2Δθ_w) = sin(π/3)/(π/3) ≈ 0.827 for 30°.
 
+    Parameters
+    ----------
+    instrument : `~gongsynth.GONGInstrument`, optional
+        Supplies the wave-plate step per frame.
+
     Returns
     -------
     float
+        Dimensionless contrast.
+
+    Examples
+    --------
+    >>> round(modulation_amplitude(), 4)
+    0.827
     """
     inst = resolve_instrument(instrument)
     half_sweep = 2 * inst.waveplate_step.to_value(u.rad)  # half of the 4Δθ sweep
-    return math.sin(half_sweep) / half_sweep
+    return float(math.sin(half_sweep) / half_sweep)
 
 
 @u.quantity_input
@@ -176,6 +194,14 @@ def waveplate_transmission(wavelength: u.nm, angle: u.deg, instrument=None):
     -------
     `~astropy.units.Quantity`
         Dimensionless, broadcast shape.
+
+    Examples
+    --------
+    >>> import astropy.units as u
+    >>> t0 = waveplate_transmission(676.78 * u.nm, 10 * u.deg)
+    >>> t90 = waveplate_transmission(676.78 * u.nm, 100 * u.deg)
+    >>> bool(abs(t0 - t90) < 1e-9)   # the pattern repeats every 90 degrees
+    True
     """
     inst = resolve_instrument(instrument)
     envelope = (prefilter_transmission(wavelength, inst) * lyot_transmission(wavelength, inst)).value
@@ -306,6 +332,14 @@ def measured_phase(channels):
     -------
     `numpy.ndarray`
         Phase in radians, shape (...).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> x = 0.4
+    >>> channels = [1 + np.cos(x - 2 * np.pi * i / 3) for i in range(3)]
+    >>> round(float(measured_phase(channels)), 6)
+    0.4
     """
     i0, i1, i2 = (np.asarray(getattr(c, "value", c), dtype=float) for c in channels)
     return np.arctan2(math.sqrt(3) * (i1 - i2), 2 * i0 - i1 - i2)
@@ -343,5 +377,11 @@ def reference_phase(instrument=None):
     -------
     `~astropy.units.Quantity`
         In radians, within (-π, π].
+
+    Examples
+    --------
+    >>> phi = reference_phase()
+    >>> phi.unit, bool(-3.15 < phi.value < 3.15)
+    (Unit("rad"), True)
     """
     return _reference_phase(resolve_instrument(instrument)) * u.rad

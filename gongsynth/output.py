@@ -37,6 +37,11 @@ def planned_files(directory, *, quicklook=True, truth=True):
     Returns
     -------
     list of `pathlib.Path`
+
+    Examples
+    --------
+    >>> [p.name for p in planned_files("run", quicklook=False, truth=False)]
+    ['magnetogram.fits', 'doppler.fits', 'continuum.fits', 'raw.fits', 'config.toml']
     """
     directory = Path(directory)
     names = [f for k, f in PRODUCT_FILES.items() if truth or not k.startswith("truth")]

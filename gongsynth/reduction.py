@@ -99,6 +99,14 @@ def subtract_dark(planes, dark, frames_per_plane, instrument=None):
     -------
     `numpy.ndarray`
         Dark-subtracted planes, DN.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import astropy.units as u
+    >>> planes = np.full((6, 1), 1000.0)
+    >>> subtract_dark(planes, 264 * u.electron, [600] * 6)[:, 0].tolist()  # 600*264/33/8 = 600
+    [400.0, 400.0, 400.0, 400.0, 400.0, 400.0]
     """
     inst = resolve_instrument(instrument)
     check_quantity(dark, u.electron, "dark")
@@ -131,6 +139,17 @@ def divide_flat(planes, flat):
     Returns
     -------
     `numpy.ndarray`
+        The flat-fielded planes.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> divide_flat(np.full((6, 1, 2), 4.0), [[1.0, 2.0]])[0].tolist()  # median 1.5
+    [[6.0, 3.0]]
+
+    Returns
+    -------
+    `numpy.ndarray`
     """
     return planes / normalise_flat(flat, planes.shape[1:])
 
@@ -149,6 +168,12 @@ def phase_to_velocity(phase, instrument=None):
     -------
     `~astropy.units.Quantity`
         m/s; positive for a redshift (the Michelson phase falls with wavelength).
+
+    Examples
+    --------
+    >>> from gongsynth.filters import reference_phase
+    >>> phase_to_velocity(reference_phase() - 0.1 * u.rad).round(2)  # 0.1 rad * v0
+    <Quantity 215.19 m / s>
     """
     inst = resolve_instrument(instrument)
     phase = u.Quantity(phase, u.rad).value

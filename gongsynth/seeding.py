@@ -70,6 +70,13 @@ def child_sequence(seed, name, *index):
     `numpy.random.SeedSequence`
         Depends only on the root entropy, the root's spawn key, ``name`` and
         ``index``: never on the order in which children were requested.
+
+    Examples
+    --------
+    >>> a = child_sequence(7, "camera", 3).generate_state(1)
+    >>> b = child_sequence(7, "camera", 3).generate_state(1)
+    >>> bool((a == b).all()), bool((a != child_sequence(7, "camera", 4).generate_state(1)).all())
+    (True, True)
     """
     root = as_seed_sequence(seed)
     key = tuple(root.spawn_key) + (_name_key(name),) + tuple(int(i) for i in index)
@@ -79,6 +86,15 @@ def child_sequence(seed, name, *index):
 def stage_generator(seed, name, *index):
     """
     A `numpy.random.Generator` (PCG64) for one stage / chunk; see `child_sequence`.
+
+    Parameters
+    ----------
+    seed : seed-like
+        Anything `as_seed_sequence` accepts.
+    name : str
+        Stage name.
+    *index : int
+        Chunk coordinates.
 
     Returns
     -------
@@ -98,8 +114,18 @@ def seed_entropy(seed):
     """
     The root entropy of a seed, as an int suitable for a FITS header or a config file.
 
+    Parameters
+    ----------
+    seed : seed-like
+        Anything `as_seed_sequence` accepts.
+
     Returns
     -------
     int
+
+    Examples
+    --------
+    >>> seed_entropy(12)
+    12
     """
     return int(as_seed_sequence(seed).entropy)

@@ -33,6 +33,16 @@ def check_quantity(value, unit, name, *, equivalencies=None):
         If ``value`` is not a Quantity.
     astropy.units.UnitsError
         If its unit cannot be converted to ``unit``.
+
+    Examples
+    --------
+    >>> import astropy.units as u
+    >>> check_quantity(3 * u.arcsec, u.deg, "seeing")
+    <Quantity 3. arcsec>
+    >>> check_quantity(3.0, u.deg, "seeing")
+    Traceback (most recent call last):
+    ...
+    TypeError: seeing must be an astropy Quantity with units of angle (e.g. deg), got float
     """
     if not isinstance(value, u.Quantity):
         raise TypeError(
@@ -47,7 +57,27 @@ def check_quantity(value, unit, name, *, equivalencies=None):
 
 
 def check_finite(array, name):
-    """Raise ValueError naming ``name`` if ``array`` holds NaN or infinity."""
+    """
+    Raise ValueError naming ``name`` if ``array`` holds NaN or infinity.
+
+    Parameters
+    ----------
+    array : array_like or `~astropy.units.Quantity`
+    name : str
+        Argument name for the message.
+
+    Returns
+    -------
+    object
+        ``array`` itself.
+
+    Examples
+    --------
+    >>> check_finite([1.0, float("nan")], "flat")
+    Traceback (most recent call last):
+    ...
+    ValueError: flat contains 1 non-finite value(s) (NaN or inf)
+    """
     values = getattr(array, "value", array)
     bad = ~np.isfinite(values)
     if np.any(bad):
@@ -56,7 +86,27 @@ def check_finite(array, name):
 
 
 def check_shape(array, shape, name):
-    """Raise ValueError naming ``name`` if ``array.shape`` differs from ``shape``."""
+    """
+    Raise ValueError naming ``name`` if ``array.shape`` differs from ``shape``.
+
+    Parameters
+    ----------
+    array : array_like
+    shape : tuple of int
+    name : str
+
+    Returns
+    -------
+    object
+        ``array`` itself.
+
+    Examples
+    --------
+    >>> check_shape([[1, 2]], (2, 1), "dark")
+    Traceback (most recent call last):
+    ...
+    ValueError: dark must have shape (2, 1), got (1, 2)
+    """
     if tuple(np.shape(array)) != tuple(shape):
         raise ValueError(f"{name} must have shape {tuple(shape)}, got {tuple(np.shape(array))}")
     return array
@@ -79,6 +129,14 @@ def check_wavelength_grid(wavelength, line_wavelength, name="wavelength"):
     -------
     `~astropy.units.Quantity`
         The grid, unchanged.
+
+    Examples
+    --------
+    >>> import astropy.units as u
+    >>> check_wavelength_grid([676.9, 677.0] * u.nm, 676.78 * u.nm)
+    Traceback (most recent call last):
+    ...
+    ValueError: wavelength (676.9000-677.0000 nm) does not cover the line at 676.7800 nm
     """
     check_quantity(wavelength, u.nm, name)
     lam = np.atleast_1d(wavelength.to_value(u.nm))
