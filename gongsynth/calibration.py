@@ -313,6 +313,17 @@ def calibration_vs_latitude(results, **kwargs):
     latitude : `~astropy.units.Quantity`
         The latitude of each result (deg).
     curves : list of `CalibrationCurve`
+
+    Examples
+    --------
+    >>> import astropy.units as u
+    >>> from gongsynth import simulate_many
+    >>> runs = simulate_many(latitudes=[0, 60] * u.deg, seed=1, detector_shape=16,
+    ...                      duration=1 * u.min, resolutions=(1,), photosphere_shape=(64, 64),
+    ...                      photosphere_pixel_size=1536 * u.km, progress=False)
+    >>> latitude, curves = calibration_vs_latitude(runs, threshold=50 * u.G, n_boot=5)
+    >>> latitude
+    <Quantity [ 0., 60.] deg>
     """
     results = list(results)
     curves = [calibration_curve(r, **kwargs) for r in results]

@@ -192,6 +192,15 @@ def read_flat(path):
     -------
     `numpy.ndarray`
         float64, not yet normalised (see `normalise_flat`).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from astropy.io import fits
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "flat.fits"
+    >>> fits.PrimaryHDU(np.full((4, 5), 2.0)).writeto(path)
+    >>> read_flat(path).shape
+    (4, 5)
     """
     data, _ = _read_image(path, "flat")
     return data
@@ -213,6 +222,15 @@ def read_dark(path, unit=None):
     -------
     `~astropy.units.Quantity`
         In electron (per frame).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from astropy.io import fits
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "dark.fits"
+    >>> fits.PrimaryHDU(np.full((4, 5), 30.0)).writeto(path)
+    >>> read_dark(path, unit=u.electron)[0, 0]
+    <Quantity 30. electron>
     """
     data, header = _read_image(path, "dark")
     bunit = header.get("BUNIT")

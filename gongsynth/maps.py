@@ -56,6 +56,16 @@ def product_header(shape, *, centre, scale, product, extra=None):
     Returns
     -------
     `sunpy.util.MetaDict`
+
+    Examples
+    --------
+    >>> import astropy.units as u
+    >>> from gongsynth.scene import field_centre
+    >>> centre, _ = field_centre(60 * u.deg)
+    >>> h = product_header((8, 8), centre=centre, scale=2.5 * u.arcsec, product="doppler",
+    ...                    extra={"seed": ("1", "root random seed")})
+    >>> h["content"], h["bunit"], h["dtype"], h["seed"]
+    ('DOPPLERGRAM', 'm s-1', 'SIMULATED', '1')
     """
     content, unit = _product(product)
     scale = u.Quantity(scale, u.arcsec / u.pix) if scale.unit.is_equivalent(u.arcsec / u.pix) \
@@ -98,6 +108,17 @@ def make_product_map(data, *, centre, scale, product, extra=None):
     Returns
     -------
     `GONGSynthMap`
+
+    Examples
+    --------
+    >>> import astropy.units as u
+    >>> import numpy as np
+    >>> from gongsynth.scene import field_centre
+    >>> centre, _ = field_centre(0 * u.deg)
+    >>> m = make_product_map(np.ones((4, 4)) * u.kG, centre=centre, scale=2.5 * u.arcsec,
+    ...                      product="truth")
+    >>> float(m.data[0, 0]), m.unit
+    (1000.0, Unit("G"))
     """
     unit = _product(product)[1]
     values = u.Quantity(data).to_value(unit)

@@ -68,6 +68,18 @@ def save_result(result, directory, *, overwrite=False, quicklook=True):
     Returns
     -------
     list of `pathlib.Path`
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> import astropy.units as u
+    >>> from gongsynth import simulate
+    >>> result = simulate(duration=1 * u.min, detector_shape=16, resolutions=(1,), seed=1,
+    ...                   photosphere_shape=(64, 64), photosphere_pixel_size=1536 * u.km,
+    ...                   progress=False)
+    >>> paths = save_result(result, tempfile.mkdtemp(), quicklook=False)
+    >>> sorted(p.name for p in paths)[:3]
+    ['config.toml', 'continuum.fits', 'doppler.fits']
     """
     directory = Path(directory)
     maps = {name: getattr(result, name) for name in PRODUCT_FILES if getattr(result, name) is not None}

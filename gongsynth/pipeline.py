@@ -353,6 +353,15 @@ def simulate_many(*, latitudes=(0, 25, 45, 60, 70, 75) * u.deg, seeds=None, conf
     list of `SimulationResult`
         In the order of the runs; identical to running `simulate` on each
         configuration serially.
+
+    Examples
+    --------
+    >>> import astropy.units as u
+    >>> runs = simulate_many(latitudes=[0, 45] * u.deg, seed=2, detector_shape=16,
+    ...                      duration=1 * u.min, resolutions=(1,), photosphere_shape=(64, 64),
+    ...                      photosphere_pixel_size=1536 * u.km, progress=False)
+    >>> [float(r.config.latitude.value) for r in runs], runs[0].config.seed == runs[1].config.seed
+    ([0.0, 45.0], True)
     """
     from tqdm.auto import tqdm
 
