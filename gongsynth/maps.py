@@ -168,9 +168,25 @@ class GONGSynthMap(GenericMap):
 
     @property
     def observatory(self):
+        """Always "gongsynth": these are simulations, not observations."""
         return "gongsynth"
 
     @classmethod
     def is_datasource_for(cls, data, header, **kwargs):
-        """Files written by gongsynth (``ORIGIN = 'gongsynth'``)."""
+        """
+        Whether a file was written by gongsynth (``ORIGIN = 'gongsynth'``).
+
+        Parameters
+        ----------
+        data : array_like
+            Unused.
+        header : dict-like
+            The FITS header.
+        **kwargs
+            Unused.
+
+        Returns
+        -------
+        bool
+        """
         return str(header.get("origin", "")).strip().lower() == "gongsynth"

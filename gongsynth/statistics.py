@@ -708,7 +708,19 @@ class LimbDarkeningProfile:
     coefficients: tuple
 
     def law(self, mu):
-        """The fitted quadratic law at ``mu`` (dimensionless ndarray)."""
+        """
+        The fitted quadratic law 1 - a(1-μ) - b(1-μ)² at ``mu``.
+
+        Parameters
+        ----------
+        mu : array_like
+            cos θ, dimensionless.
+
+        Returns
+        -------
+        `numpy.ndarray`
+            I(μ) / I(disk centre), dimensionless.
+        """
         a, b = self.coefficients
         x = 1 - np.asarray(mu, dtype=float)
         return 1 - a * x - b * x**2
