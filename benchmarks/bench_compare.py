@@ -24,9 +24,9 @@ from astropy.coordinates import SkyCoord
 from sunpy.coordinates import frames
 
 from gongsynth import GONGInstrument
-from gongsynth.compare import _overlap_operator, degrade_to_gong
-from gongsynth.optics import psf_kernel
-from gongsynth.statistics import disk_coordinates
+from gongsynth.analysis.compare import _overlap_operator, degrade_to_gong
+from gongsynth.stages.optics import psf_kernel
+from gongsynth.analysis.statistics import disk_coordinates
 
 
 def hmi_like(size, scale):

@@ -26,12 +26,14 @@ import numpy as np
 import scipy.ndimage
 import scipy.signal
 
+from gongsynth.geometry import Pointing
 from gongsynth import GONGInstrument
-from gongsynth.filters import channel_weights
-from gongsynth.optics import expected_counts, observe, photometric_factor, psf_kernel
-from gongsynth.photosphere import model_photosphere, synthesize
-from gongsynth.polarimetry import channel_images, polarized_spectra
-from gongsynth.scene import radiance_at_earth, tile, tiled_scenes
+from gongsynth.stages.filters import channel_weights
+from gongsynth.stages.optics import expected_counts, observe, photometric_factor, psf_kernel
+from gongsynth.sun.photosphere import model_photosphere, synthesize
+from gongsynth.stages.channels import channel_images, polarized_spectra
+from gongsynth.stages.scene.scene import radiance_at_earth
+from gongsynth.stages.scene.tiled import tile, tiled_scenes
 
 
 def timed(label, func, *args, **kwargs):
@@ -81,7 +83,7 @@ def main():
     tracemalloc.start()
     planes, t_filter = timed("channel_images (Mueller + filter)", channel_images, cube, instrument=inst)
     (light, truth), t_tile = timed("tiled_scenes (4 resolutions)", tiled_scenes, planes, cube.blos,
-                                   cube.pixel_size, latitude=latitude, shape=args.grid, instrument=inst)
+                                   cube.pixel_size, pointing=Pointing(latitude), shape=args.grid, instrument=inst)
     _, peak_scene = tracemalloc.get_traced_memory()
     tracemalloc.reset_peak()
     before, _ = tracemalloc.get_traced_memory()
@@ -112,7 +114,7 @@ def main():
     t_mueller = time.perf_counter() - start
     start = time.perf_counter()
     for j in chosen:
-        sky = radiance_at_earth(tile(spectra[..., j], cube.pixel_size, latitude=latitude,
+        sky = radiance_at_earth(tile(spectra[..., j], cube.pixel_size, pointing=Pointing(latitude),
                                      shape=args.grid, instrument=inst))
         seen = observe(sky, light.pixel_scale, instrument=inst, boundary=light.boundary,
                        workers=args.workers).value

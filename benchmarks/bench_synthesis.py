@@ -1,7 +1,7 @@
 """
 Benchmark: Milne–Eddington synthesis of the full default cube (1024² × 51).
 
-Times `gongsynth.photosphere.model_photosphere` and `synthesize` (numba kernel)
+Times `gongsynth.sun.photosphere.model_photosphere` and `synthesize` (numba kernel)
 on the default photosphere, the plain-numpy reference (same formulae,
 vectorised, exact Faddeeva function) on a block of rows of the same input, and
 prints the speed ratio, the largest difference between the two and the peak
@@ -18,7 +18,7 @@ import astropy.units as u
 import numba
 import numpy as np
 
-from gongsynth.photosphere import model_photosphere, synthesize
+from gongsynth.sun.photosphere import model_photosphere, synthesize
 
 
 def timed(fn, *args, **kwargs):

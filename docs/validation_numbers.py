@@ -24,9 +24,10 @@ import astropy.constants as const
 import astropy.units as u
 import numpy as np
 
+from gongsynth.geometry import Pointing
 from gongsynth import GONGInstrument
-from gongsynth import filters
-from gongsynth.reduction import reduce
+from gongsynth.stages import filters
+from gongsynth.stages.reduction import reduce
 
 __all__ = ["Row", "ROWS", "measure", "main"]
 
@@ -186,10 +187,12 @@ def _wrapping():
 
 
 def _filter_first():
-    from gongsynth.optics import observe
-    from gongsynth.photosphere import Photosphere, synthesize
-    from gongsynth.polarimetry import channel_images, polarized_spectra
-    from gongsynth.scene import radiance_at_earth, tile, tiled_scenes, viewing_geometry
+    from gongsynth.stages.optics import observe
+    from gongsynth.sun.photosphere import Photosphere, synthesize
+    from gongsynth.stages.channels import channel_images, polarized_spectra
+    from gongsynth.stages.scene.scene import radiance_at_earth
+    from gongsynth.stages.scene.tiled import tile, tiled_scenes
+    from gongsynth.geometry import viewing_geometry
 
     rng = np.random.default_rng(5)
     shape = (16, 16)
@@ -201,7 +204,7 @@ def _filter_first():
     mu, azimuth = viewing_geometry(latitude)
     cube = synthesize(columns, mu=mu, los_azimuth=azimuth)
     mueller = np.eye(4) + 0.02 * rng.normal(size=(cube.shape[2], 4, 4))
-    geometry = dict(latitude=latitude, resolutions=(1, 2, 4, 8), detector_shape=12)
+    geometry = dict(pointing=Pointing(latitude), resolutions=(1, 2, 4, 8), detector_shape=12)
     light, _ = tiled_scenes(channel_images(cube, mueller=mueller), cube.blos, cube.pixel_size,
                             **geometry)
     fast = observe(light.data, light.pixel_scale, boundary=light.boundary)
@@ -223,7 +226,7 @@ def _filter_first():
 
 
 def _psf():
-    from gongsynth.optics import psf_profile
+    from gongsynth.stages.optics import psf_profile
 
     r = np.linspace(0, 12, 12001) * u.arcsec
     airy = psf_profile(r, GONG.replace(seeing_fwhm=1e-6 * u.arcsec)).value
@@ -237,7 +240,7 @@ def _psf():
 
 
 def _flux():
-    from gongsynth.optics import observe
+    from gongsynth.stages.optics import observe
 
     rng = np.random.default_rng(4)
     scene = rng.gamma(2.0, size=(6, 160, 160))
@@ -248,8 +251,8 @@ def _flux():
 
 
 def _counts():
-    from gongsynth.optics import photometric_factor
-    from gongsynth.scene import radiance_at_earth
+    from gongsynth.stages.optics import photometric_factor
+    from gongsynth.stages.scene.scene import radiance_at_earth
 
     lam = np.linspace(676.78 - 3, 676.78 + 3, 60001) * u.nm
     integral = np.trapezoid(filters.channel_responses(lam).value, lam.to_value(u.cm), axis=1) * u.cm
@@ -265,7 +268,7 @@ def _mdi_noise():
         return f"(file not found: {path.name})"
     import warnings
 
-    from gongsynth.compare import load_observation, noise_estimate
+    from gongsynth.analysis.compare import load_observation, noise_estimate
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         noise = noise_estimate(load_observation(path))
@@ -274,7 +277,7 @@ def _mdi_noise():
 
 
 def _schedule():
-    from gongsynth.schedule import dither_sequence, frame_schedule
+    from gongsynth.stages.camera.schedule import dither_sequence, frame_schedule
 
     schedule = frame_schedule(10 * u.min)
     d = dither_sequence(3600)
@@ -284,8 +287,8 @@ def _schedule():
 
 def _quiet_sun_expected(shape, field=0 * u.G, velocity=0 * u.m / u.s):
     """Expected electrons per frame of a uniform disk-centre quiet Sun, (6, ny, nx)."""
-    from gongsynth.optics import photometric_factor
-    from gongsynth.scene import radiance_at_earth
+    from gongsynth.stages.optics import photometric_factor
+    from gongsynth.stages.scene.scene import radiance_at_earth
 
     continuum = 3.0e14 * u.Unit("erg / (s cm2 sr cm)")  # design §3.10
     planes = _planes(field, velocity)[:, 0] * u.nm * continuum
@@ -294,7 +297,7 @@ def _quiet_sun_expected(shape, field=0 * u.G, velocity=0 * u.m / u.s):
 
 
 def _noise():
-    from gongsynth.camera import integrate
+    from gongsynth.stages.camera.integrate import integrate
 
     expected = _quiet_sun_expected((100, 100))
     parts = []
@@ -308,7 +311,7 @@ def _noise():
 
 
 def _engines():
-    from gongsynth.camera import integrate
+    from gongsynth.stages.camera.integrate import integrate
 
     expected = _quiet_sun_expected((100, 100), field=80 * u.G, velocity=400 * u.m / u.s)
     out = {}
@@ -322,7 +325,7 @@ def _engines():
 
 
 def _quiet_profile():
-    from gongsynth.photosphere import model_photosphere, synthesize
+    from gongsynth.sun.photosphere import model_photosphere, synthesize
 
     fine = np.linspace(676.73, 676.83, 401) * u.nm
     columns = model_photosphere(shape=(128, 128), pixel_size=96 * u.km, spot=False, plage=False,

@@ -17,8 +17,14 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from gongsynth import GONGInstrument
-from gongsynth.filters import (channel_responses, channel_weights, lyot_transmission,
-                               measured_phase, modulation_amplitude, prefilter_transmission)
+from gongsynth.stages.filters import (
+    channel_responses,
+    channel_weights,
+    lyot_transmission,
+    measured_phase,
+    modulation_amplitude,
+    prefilter_transmission,
+)
 
 gong = GONGInstrument()
 lam0 = gong.line_wavelength

@@ -28,8 +28,14 @@ import sunpy.data.test
 from astropy.io import fits
 
 import gongsynth
-from gongsynth.compare import compare, degrade_to_gong, limb_darkening, load_observation, noise_estimate
-from gongsynth.statistics import disk_coordinates
+from gongsynth.analysis.compare import (
+    compare,
+    degrade_to_gong,
+    limb_darkening,
+    load_observation,
+    noise_estimate,
+)
+from gongsynth.analysis.statistics import disk_coordinates
 
 
 def real_data_folder():
@@ -116,7 +122,7 @@ print(type(gong_format).__name__, gong_format.unit, f"quiet-Sun noise {noise_est
 # synthesises every point at its own viewing angle.  A one-minute
 # magnetogram, as GONG takes them; ``supersampling=2`` keeps this example
 # quick (the default 5 changes the field by ~10 G rms, see
-# `~gongsynth.fulldisk.full_disk_scene`).
+# `~gongsynth.stages.scene.fulldisk.full_disk_scene`).
 
 sim = gongsynth.simulate(mode="full-disk", duration=1 * u.min, seed=2, progress=False,
                          instrument=gongsynth.GONGInstrument(supersampling=2)).magnetogram

@@ -18,8 +18,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from gongsynth import GONGInstrument
-from gongsynth.filters import channel_weights
-from gongsynth.reduction import reduce
+from gongsynth.stages.filters import channel_weights
+from gongsynth.stages.reduction import reduce
 
 gong = GONGInstrument()
 lam0 = gong.line_wavelength

@@ -8,8 +8,8 @@ frame and a liquid-crystal retarder (LCVR) flips between I+V and I−V every
 second.  Each frame is added to one of six accumulation planes, after Poisson
 photon and dark noise, 4.8 adu read noise, conversion to adu at 33 e⁻/adu and a
 dither offset; at the end the three lowest bits are dropped.  This example
-shows the frame schedule of `gongsynth.schedule`, the six raw planes that
-`gongsynth.camera.integrate` makes of a small quiet-Sun scene with a bipolar
+shows the frame schedule of `gongsynth.stages.camera.schedule`, the six raw planes that
+`gongsynth.stages.camera.integrate.integrate` makes of a small quiet-Sun scene with a bipolar
 magnetic region, and how the magnetogram and Doppler noise fall with the
 observing time.
 """
@@ -19,11 +19,11 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from gongsynth import GONGInstrument
-from gongsynth.camera import integrate
-from gongsynth.filters import channel_weights
+from gongsynth.stages.camera.integrate import integrate
+from gongsynth.stages.filters import channel_weights
 from gongsynth.planes import PLANE_NAMES
-from gongsynth.reduction import reduce
-from gongsynth.schedule import frame_schedule
+from gongsynth.stages.reduction import reduce
+from gongsynth.stages.camera.schedule import frame_schedule
 
 gong = GONGInstrument()
 
@@ -31,7 +31,7 @@ gong = GONGInstrument()
 # The frame schedule
 # ------------------
 #
-# `~gongsynth.schedule.frame_schedule` returns, for every frame, its time,
+# `~gongsynth.stages.camera.schedule.frame_schedule` returns, for every frame, its time,
 # wave-plate angle, channel (sector mod 3), polarisation and plane, and the
 # dither it carries.  The dither is a triangle wave: +2 adu every 12th frame in
 # the first half of each minute, −2 in the second half, starting from 32; its
@@ -66,7 +66,7 @@ fig.suptitle("GONG magnetogram-mode frame schedule (first 2.5 s; dither over one
 # -------------------------------------
 #
 # The camera starts from the expected number of photo-electrons per frame in
-# each plane (normally made by `gongsynth.optics`).  Here we make one by hand:
+# each plane (normally made by `gongsynth.stages.optics`).  Here we make one by hand:
 # a Gaussian Ni line (depth 0.6, FWHM 10 pm) seen through the three channels,
 # with a continuum of 1.2e5 electrons per frame per pixel at disk centre, and a
 # bipolar region of ±300 G that Zeeman-shifts the line in I+V and I−V.

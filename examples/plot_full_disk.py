@@ -3,7 +3,7 @@
 A synthetic full-disk GONG map
 ==============================
 
-The paper avoided mapping its simulation onto the sphere.  `gongsynth.fulldisk`
+The paper avoided mapping its simulation onto the sphere.  `gongsynth.stages.scene.fulldisk`
 does it: every supersampled point of GONG's 860 × 860 field is traced to the
 solar surface, gets its own viewing angle μ and line-of-sight azimuth, takes
 the column of the periodic photosphere below it, and its spectrum is
@@ -22,10 +22,11 @@ import numpy as np
 import sunpy.map
 
 from gongsynth import GONGInstrument
-from gongsynth.fulldisk import disk_geometry, full_disk_scene
-from gongsynth.optics import expected_counts, observe
-from gongsynth.photosphere import model_photosphere
-from gongsynth.reduction import reduce
+from gongsynth.geometry import disk_geometry
+from gongsynth.stages.scene.fulldisk import full_disk_scene
+from gongsynth.stages.optics import expected_counts, observe
+from gongsynth.sun.photosphere import model_photosphere
+from gongsynth.stages.reduction import reduce
 
 # %%
 # The built-in photosphere repeats every 98 Mm, so a sunspot in it would appear

@@ -21,7 +21,7 @@ import numpy as np
 from dask.distributed import Client, LocalCluster
 
 import gongsynth
-from gongsynth.calibration import calibration_vs_latitude
+from gongsynth.analysis.calibration import calibration_vs_latitude
 
 latitudes = [0, 25, 45, 60, 70, 75] * u.deg
 with LocalCluster(n_workers=2, threads_per_worker=1, processes=False,

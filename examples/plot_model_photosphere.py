@@ -12,7 +12,7 @@ import astropy.units as u
 import matplotlib.pyplot as plt
 import numpy as np
 
-from gongsynth.photosphere import model_photosphere, synthesize
+from gongsynth.sun.photosphere import model_photosphere, synthesize
 
 # %%
 # Build the default photosphere (seeded: the same every time) and look at the

@@ -9,9 +9,9 @@ viewing angle, and shows it at four scales at once: quadrant k is magnified
 2^k times (GONG resolution at the bottom left, 2×, 4× and 8× to the right and
 top), which is the same as an instrument with 2^k times better resolution.
 
-This example builds those scenes with `gongsynth.scene` from the built-in
+This example builds those scenes with `gongsynth.stages.scene.tiled` from the built-in
 photosphere at disk centre and at 60° latitude, pushes them through the PSF
-and the pixelization of `gongsynth.optics`, and turns the noise-free expected
+and the pixelization of `gongsynth.stages.optics`, and turns the noise-free expected
 counts into magnetograms with the GONG reduction.
 """
 # sphinx_gallery_thumbnail_number = 2
@@ -21,10 +21,12 @@ import numpy as np
 import sunpy.map
 
 from gongsynth import GONGInstrument
-from gongsynth.optics import expected_counts, observe
-from gongsynth.photosphere import model_photosphere, synthesize
-from gongsynth.reduction import reduce
-from gongsynth.scene import tiled_scene, viewing_geometry
+from gongsynth.geometry import Pointing
+from gongsynth.stages.channels import channel_images
+from gongsynth.stages.optics import expected_counts, observe
+from gongsynth.stages.reduction import reduce
+from gongsynth.stages.scene.tiled import tiled_scenes
+from gongsynth.sun.photosphere import model_photosphere, synthesize
 
 gong = GONGInstrument()
 
@@ -51,7 +53,7 @@ fig.colorbar(im, ax=ax, label="G")
 #
 # Each viewing angle is a separate scene.  The spectra are synthesised at the
 # μ and line-of-sight azimuth of a region on the central meridian
-# (`gongsynth.scene.viewing_geometry`), collapsed to the six channel planes
+# (`gongsynth.geometry.Pointing`), collapsed to the six channel planes
 # (filter first), tiled over a 430 × 430-pixel field (half of GONG's, to keep
 # this example short) and placed on a helioprojective grid whose centre lies at
 # the chosen latitude.  The 60° scene is foreshortened by cos 60° = 0.5
@@ -59,10 +61,11 @@ fig.colorbar(im, ax=ax, label="G")
 
 maps = {}
 for latitude in (0, 60) * u.deg:
-    mu, azimuth = viewing_geometry(latitude)
-    cube = synthesize(photosphere, mu=mu, los_azimuth=azimuth, instrument=gong)
-    scene = tiled_scene(cube, latitude=latitude, resolutions=(1, 2, 4, 8), detector_shape=430,
-                        instrument=gong)
+    pointing = Pointing(latitude)
+    cube = synthesize(photosphere, mu=pointing.mu, los_azimuth=pointing.los_azimuth, instrument=gong)
+    scene, _ = tiled_scenes(channel_images(cube, instrument=gong), cube.blos, cube.pixel_size,
+                            pointing=pointing, resolutions=(1, 2, 4, 8), detector_shape=430,
+                            instrument=gong)
     counts = expected_counts(scene)  # electrons per frame per pixel, 6 planes
     observed = reduce(counts.value, gong)
     truth = observe(scene.blos, scene.pixel_scale, instrument=gong, boundary=scene.boundary)

@@ -3,18 +3,35 @@ gongsynth: what would GONG have measured?
 
 An end-to-end simulator of the GONG magnetograph, from Stokes spectra of the
 Ni I 676.8 nm line to GONG Doppler and line-of-sight magnetograms as sunpy Maps.
+
+The package's folders follow the data flow: `gongsynth.sun` (the input
+spectra), `gongsynth.stages` (the instrument), `gongsynth.products` (Maps and
+files) and `gongsynth.analysis` (real data, comparison, calibration).
 """
-from importlib.metadata import PackageNotFoundError, version
+import sys
 
-try:
-    __version__ = version("gongsynth")
-except PackageNotFoundError:  # pragma: no cover - running from a source tree
-    __version__ = "0.0.0+unknown"
+from gongsynth.analysis import calibration, compare
+from gongsynth.analysis.observations import load_observation
+from gongsynth.instrument import GONGInstrument
+from gongsynth.pipeline import SimulationResult, simulate, simulate_many
+from gongsynth.products.maps import GONGSynthMap  # registers the map source with sunpy.map.Map
+from gongsynth.stages import filters, reduction
+from gongsynth.sun import photosphere
+from gongsynth.sun.stokes import StokesCube
+from gongsynth.version import version as __version__
 
-from .instrument import GONGInstrument  # noqa: E402
-from .maps import GONGSynthMap  # noqa: E402  (registers the map source with sunpy.map.Map)
-from .pipeline import SimulationResult, simulate, simulate_many  # noqa: E402
-from .stokes import StokesCube  # noqa: E402
+__citation__ = (
+    "Plowman, J. & Berger, T., Calibrating GONG Magnetograms with End-to-end Instrument "
+    "Simulation I, and the gongsynth software (version " + __version__ + "); see CITATION.cff"
+)
 
-__all__ = ["GONGInstrument", "GONGSynthMap", "SimulationResult", "StokesCube", "simulate",
-           "simulate_many", "__version__"]
+# The dotted paths promised to users (DESIGN §2) name the modules in their new
+# folders: ``import gongsynth.filters`` gives `gongsynth.stages.filters` itself.
+for _name, _module in {"filters": filters, "reduction": reduction, "compare": compare,
+                       "calibration": calibration, "photosphere": photosphere}.items():
+    sys.modules[f"{__name__}.{_name}"] = _module
+del _name, _module
+
+__all__ = ["GONGInstrument", "GONGSynthMap", "SimulationResult", "StokesCube", "calibration",
+           "compare", "filters", "load_observation", "photosphere", "reduction", "simulate",
+           "simulate_many", "__citation__", "__version__"]

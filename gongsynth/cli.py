@@ -18,7 +18,7 @@ from pathlib import Path
 
 import astropy.units as u
 
-from . import __version__
+from gongsynth.version import version as __version__
 
 __all__ = ["main", "build_parser"]
 
@@ -73,7 +73,7 @@ def build_parser():
 
 
 def _simulation_config(args):
-    from .config import SimulationConfig
+    from gongsynth.config import SimulationConfig
 
     config = SimulationConfig.from_toml(args.config) if args.config else SimulationConfig()
     changes = {}
@@ -92,9 +92,9 @@ def _simulation_config(args):
 
 
 def _run_simulate(args):
-    from .atomic import check_writable
-    from .output import planned_files
-    from .pipeline import simulate, simulate_many
+    from gongsynth.files import check_writable
+    from gongsynth.products.output import planned_files
+    from gongsynth.pipeline import simulate, simulate_many
 
     config = _simulation_config(args)
     progress = not args.quiet
@@ -122,7 +122,7 @@ def _sweep_folder(out, latitude):
 
 
 def _run_compare(args):
-    from .compare import compare_files
+    from gongsynth.analysis.compare import compare_files
 
     report = compare_files(args.simulated, args.observed, out=args.out,
                            overwrite=args.overwrite)
@@ -160,7 +160,7 @@ def main(argv=None):
     args = parser.parse_args(argv)
     try:
         if args.command == "config":
-            from .config import SimulationConfig
+            from gongsynth.config import SimulationConfig
 
             print(SimulationConfig().to_toml(), end="")
             return EXIT_OK

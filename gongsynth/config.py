@@ -14,10 +14,10 @@ from pathlib import Path
 import astropy.units as u
 from astropy.time import Time
 
-from .instrument import GONGInstrument
-from .scene import DEFAULT_OBSTIME as _SCENE_OBSTIME
-from .seeding import as_seed_sequence
-from .tomlfmt import toml_value
+from gongsynth.instrument import GONGInstrument
+from gongsynth.geometry import DEFAULT_OBSTIME as _DEFAULT_TIME
+from gongsynth.seeding import as_seed_sequence
+from gongsynth.tomlfmt import toml_value
 
 __all__ = ["SimulationConfig", "ENGINES", "MODES", "DEFAULT_OBSTIME"]
 
@@ -26,7 +26,7 @@ ENGINES = ("blocks", "frames")
 #: Scene modes accepted by `SimulationConfig.mode`.
 MODES = ("tiled", "full-disk")
 #: Default observation time (B0 ≈ 0), as an ISO string.
-DEFAULT_OBSTIME = _SCENE_OBSTIME.isot
+DEFAULT_OBSTIME = _DEFAULT_TIME.isot
 
 _QUANTITIES = {
     "latitude": (u.deg, "heliographic latitude of the field centre on the central meridian"),

@@ -19,7 +19,7 @@ from pathlib import Path
 import astropy.constants as const
 import astropy.units as u
 
-from .tomlfmt import toml_value
+from gongsynth.tomlfmt import toml_value
 
 __all__ = ["GONGInstrument", "PREFILTER_FORMS", "resolve_instrument"]
 

@@ -11,11 +11,11 @@ from dataclasses import dataclass, field
 import astropy.units as u
 import numpy as np
 
-from . import __version__
-from .config import SimulationConfig
-from .maps import make_product_map
-from .reduction import reduce
-from .seeding import child_sequence
+from gongsynth.version import version as __version__
+from gongsynth.config import SimulationConfig
+from gongsynth.products.maps import make_product_map
+from gongsynth.stages.reduction import reduce
+from gongsynth.seeding import child_sequence
 
 __all__ = ["SimulationResult", "simulate", "simulate_many"]
 
@@ -26,17 +26,17 @@ class SimulationResult:
 
     Attributes
     ----------
-    magnetogram : `~gongsynth.maps.GONGSynthMap`
+    magnetogram : `~gongsynth.products.maps.GONGSynthMap`
         Measured line-of-sight flux density (G).
-    doppler : `~gongsynth.maps.GONGSynthMap`
+    doppler : `~gongsynth.products.maps.GONGSynthMap`
         Measured line-of-sight velocity (m/s, positive away from the observer).
-    continuum : `~gongsynth.maps.GONGSynthMap`
+    continuum : `~gongsynth.products.maps.GONGSynthMap`
         Pseudo-continuum, the sum of the six planes (DN).
-    truth : `~gongsynth.maps.GONGSynthMap` or None
+    truth : `~gongsynth.products.maps.GONGSynthMap` or None
         True B_LOS of the input averaged over each detector pixel (G; design §3.13).
-    truth_psf : `~gongsynth.maps.GONGSynthMap` or None
+    truth_psf : `~gongsynth.products.maps.GONGSynthMap` or None
         The same seen through the instrument PSF first.
-    raw : `~gongsynth.camera.RawPlanes`
+    raw : `~gongsynth.stages.camera.integrate.RawPlanes`
         The six accumulated raw planes.
     scene : `~astropy.units.Quantity`
         Expected electrons per frame per pixel, shape (6, ny, nx), before noise.
@@ -100,7 +100,7 @@ class SimulationResult:
         list of `pathlib.Path`
             The files written.
         """
-        from .output import save_result
+        from gongsynth.products.output import save_result
 
         return save_result(self, directory, overwrite=overwrite, quicklook=quicklook)
 
@@ -123,7 +123,7 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="bl
     duration : `~astropy.units.Quantity`
         Observation length (10 min: the paper's; 1 min: a GONG magnetogram).
     engine : {"blocks", "frames"}
-        Camera engine (see `gongsynth.camera`).
+        Camera engine (see `gongsynth.stages.camera.integrate`).
     seed : int, `numpy.random.SeedSequence`, `numpy.random.Generator` or None
         Root seed; ``None`` draws one and records it in ``result.config``.
     instrument : `~gongsynth.GONGInstrument`, optional
@@ -140,7 +140,7 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="bl
     photosphere_pixel_size : `~astropy.units.Quantity`
         Its pixel size (length; 96 km like the paper's binned MURaM cube).
     flat, dark : optional
-        Detector flat field and dark map (see `gongsynth.camera.integrate`);
+        Detector flat field and dark map (see `gongsynth.stages.camera.integrate.integrate`);
         default the synthetic GONG-like ones.
     workers : int, optional
         Threads for the frames engine and the FFTs.
@@ -181,8 +181,11 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="bl
 
 
 def _run(config, *, stokes, flat, dark, progress):
-    from . import camera, optics, polarimetry
-    from . import scene as scene_mod
+    from gongsynth.geometry import Pointing
+    from gongsynth.stages import channels as polarimetry
+    from gongsynth.stages import optics
+    from gongsynth.stages.camera import integrate as camera
+    from gongsynth.stages.scene import tiled as scene_mod
 
     from tqdm.auto import tqdm
 
@@ -208,7 +211,7 @@ def _run(config, *, stokes, flat, dark, progress):
         if stokes is not None:
             raise ValueError("mode='full-disk' synthesises the built-in photosphere at every "
                              "point's own viewing angle; it does not take a stokes cube")
-        from . import fulldisk
+        from gongsynth.stages.scene import fulldisk
         photosphere = _photosphere(config)
         lap("photosphere")
         light, truth_scene = fulldisk.full_disk_scene(
@@ -217,19 +220,19 @@ def _run(config, *, stokes, flat, dark, progress):
         lap("synthesis+scene")
     else:
         if stokes is None:
-            from .photosphere import synthesize
+            from gongsynth.sun.photosphere import synthesize
 
-            mu, los_azimuth = scene_mod.viewing_geometry(config.latitude, config.obstime)
-            stokes = synthesize(_photosphere(config), mu=mu, los_azimuth=los_azimuth,
+            pointing = Pointing(config.latitude, config.obstime)
+            stokes = synthesize(_photosphere(config), mu=pointing.mu, los_azimuth=pointing.los_azimuth,
                                 instrument=inst)
             lap("synthesis")
         else:
-            _check_cube_geometry(stokes, config.latitude, config.obstime)
+            Pointing(config.latitude, config.obstime).check_mu(stokes.mu)
         channels = polarimetry.channel_images(stokes, instrument=inst)
         lap("filters")
         light, truth_scene = scene_mod.tiled_scenes(
-            channels, stokes.blos, stokes.pixel_size, latitude=config.latitude,
-            obstime=config.obstime, detector_shape=config.detector_pixels,
+            channels, stokes.blos, stokes.pixel_size, pointing=Pointing(config.latitude, config.obstime),
+            detector_shape=config.detector_pixels,
             resolutions=config.resolutions, instrument=inst)
         lap("scene")
 
@@ -286,23 +289,11 @@ def _blank(image, sky):
 
 
 def _photosphere(config):
-    from .photosphere import model_photosphere
+    from gongsynth.sun.photosphere import model_photosphere
 
     return model_photosphere(shape=config.photosphere_shape,
                              pixel_size=config.photosphere_pixel_size,
                              seed=child_sequence(config.seed, "photosphere"))
-
-
-def _check_cube_geometry(stokes, latitude, obstime):
-    from .scene import viewing_geometry
-
-    mu, _ = viewing_geometry(latitude, obstime)
-    cube_mu = np.asarray(stokes.mu)
-    if cube_mu.ndim == 0 and abs(float(cube_mu) - mu) > 1e-3:
-        raise ValueError(
-            f"the stokes cube was computed for mu = {float(cube_mu):.4f} but latitude = {latitude} "
-            f"needs mu = {mu:.4f}: pass the latitude the cube was made for"
-        )
 
 
 def _run_header(config):

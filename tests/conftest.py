@@ -9,7 +9,7 @@ from .lines import C_LIGHT, gaussian_line, zeeman_shift
 @pytest.fixture
 def shifted_planes():
     """Build the six channel integrals of I+V and I-V for a given B and v."""
-    from gongsynth.filters import channel_weights
+    from gongsynth.stages.filters import channel_weights
 
     def build(field, velocity, instrument, wavelength=None, **line):
         lam = wavelength if wavelength is not None else np.linspace(676.6, 676.96, 1801) * u.nm

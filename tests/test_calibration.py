@@ -2,7 +2,8 @@ import astropy.units as u
 import numpy as np
 import pytest
 
-from gongsynth.calibration import calibration_curve, robust_slope
+from gongsynth.geometry import Pointing
+from gongsynth.analysis.calibration import calibration_curve, robust_slope
 
 
 def test_robust_slope_ignores_outliers():
@@ -47,17 +48,18 @@ def test_curve_bad_input():
 @pytest.mark.parametrize("latitude", [0, 60] * u.deg)
 def test_noiseless_psf_free_factor_is_the_line_physics(latitude):
     """Without noise and PSF, GONG measures the pixel-averaged field up to the line's ~0.99."""
-    from gongsynth.optics import expected_counts, observe
-    from gongsynth.photosphere import model_photosphere, synthesize
-    from gongsynth.polarimetry import channel_images
-    from gongsynth.reduction import reduce
-    from gongsynth.scene import tiled_scenes, viewing_geometry
+    from gongsynth.stages.optics import expected_counts, observe
+    from gongsynth.sun.photosphere import model_photosphere, synthesize
+    from gongsynth.stages.channels import channel_images
+    from gongsynth.stages.reduction import reduce
+    from gongsynth.stages.scene.tiled import tiled_scenes
+    from gongsynth.geometry import viewing_geometry
 
     photosphere = model_photosphere(shape=(256, 256), pixel_size=384 * u.km, seed=5)
     mu, los_azimuth = viewing_geometry(latitude)
     stokes = synthesize(photosphere, mu=mu, los_azimuth=los_azimuth)
     light, truth = tiled_scenes(channel_images(stokes), stokes.blos, stokes.pixel_size,
-                                latitude=latitude, resolutions=(1,), detector_shape=96)
+                                pointing=Pointing(latitude), resolutions=(1,), detector_shape=96)
     measured = reduce(expected_counts(light, psf=False).value).magnetogram
     true = observe(truth.data, truth.pixel_scale, psf=False, boundary=truth.boundary)
     curve = calibration_curve(measured, true, threshold=100 * u.G, n_boot=10)

@@ -10,7 +10,7 @@ from astropy.coordinates import SkyCoord
 from sunpy.coordinates import frames
 
 from gongsynth import GONGInstrument
-from gongsynth.compare import (
+from gongsynth.analysis.compare import (
     ComparisonReport,
     compare,
     compare_files,
@@ -19,8 +19,8 @@ from gongsynth.compare import (
     load_observation,
     noise_estimate,
 )
-from gongsynth.observations import BadHeaderWarning, ObservationKindError
-from gongsynth.statistics import disk_coordinates, local_pixel_scale
+from gongsynth.analysis.observations import BadHeaderWarning, ObservationKindError
+from gongsynth.analysis.statistics import disk_coordinates, local_pixel_scale
 
 from .realdata import gong_rho, real_file, write_gong_fits
 
@@ -128,7 +128,7 @@ def test_psf_width_adds_in_quadrature():
 
 
 def test_gong_psf_from_optics_is_the_default():
-    optics = pytest.importorskip("gongsynth.optics")
+    optics = pytest.importorskip("gongsynth.stages.optics")
     point = np.zeros((201, 201))
     point[100, 100] = 1.0
     m = hpc_map(point, 0.5, ref_pixel=(100, 100))
@@ -393,8 +393,8 @@ def test_real_mdi_continuum_limb_darkening_survives_degradation():
 
 
 def test_gongsynth_product_file_compared_off_disk_centre(tmp_path):
-    from gongsynth import maps
-    from gongsynth.scene import field_centre
+    from gongsynth.products import maps
+    from gongsynth.geometry import field_centre
 
     rng = np.random.default_rng(12)
     # A 120 x 120 field (300") at 60 degrees latitude: no quiet box near disk centre lies on it.

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from gongsynth import GONGInstrument
-from gongsynth import filters
+from gongsynth.stages import filters
 
 from .lines import gaussian_line
 
@@ -107,7 +107,7 @@ def test_continuum_padding_equals_wide_window():
 
 def test_narrow_integration_range_would_bias_the_field():
     """Design 3.8: integrating over +-0.05 nm instead of +-3 nm gives B about 30 % low."""
-    from gongsynth.reduction import reduce
+    from gongsynth.stages.reduction import reduce
     from .lines import zeeman_shift
     field = 1000 * u.G
     results = []

@@ -1,4 +1,4 @@
-"""Tests of gongsynth.fulldisk: disk geometry and full-disk scenes."""
+"""Tests of gongsynth.stages.scene.fulldisk: disk geometry and full-disk scenes."""
 import math
 
 import astropy.units as u
@@ -9,12 +9,14 @@ from astropy.time import Time
 from sunpy.coordinates import HeliographicStonyhurst, get_earth, sun
 
 from gongsynth import GONGInstrument
-from gongsynth import fulldisk
-from gongsynth.fulldisk import disk_geometry, full_disk_scene
-from gongsynth.optics import expected_counts
-from gongsynth.photosphere import Photosphere, synthesize
-from gongsynth.polarimetry import channel_images
-from gongsynth.scene import DEFAULT_OBSTIME, radiance_at_earth, wcs_header
+from gongsynth.stages.scene import fulldisk
+from gongsynth.geometry import disk_geometry
+from gongsynth.stages.scene.fulldisk import full_disk_scene
+from gongsynth.stages.optics import expected_counts
+from gongsynth.sun.photosphere import Photosphere, synthesize
+from gongsynth.stages.channels import channel_images
+from gongsynth.geometry import DEFAULT_OBSTIME, wcs_header
+from gongsynth.stages.scene.scene import radiance_at_earth
 
 # A coarse instrument that sees the whole disk on a small detector (fast tests).
 COARSE = GONGInstrument(plate_scale=25 * u.arcsec)

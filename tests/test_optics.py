@@ -1,4 +1,4 @@
-"""Tests of gongsynth.optics: PSF, convolution, pixelization and photometry."""
+"""Tests of gongsynth.stages.optics: PSF, convolution, pixelization and photometry."""
 import math
 from types import SimpleNamespace
 
@@ -10,9 +10,17 @@ import scipy.signal
 from scipy.special import j1
 
 from gongsynth import GONGInstrument
-from gongsynth import optics
-from gongsynth.optics import (convolve, expected_counts, normalize_kernel, observe, photometric_factor,
-                              pixelize, psf_kernel, psf_profile)
+from gongsynth.stages import optics
+from gongsynth.stages.optics import (
+    convolve,
+    expected_counts,
+    normalize_kernel,
+    observe,
+    photometric_factor,
+    pixelize,
+    psf_kernel,
+    psf_profile,
+)
 
 ARCSEC = math.pi / 648000  # rad
 
@@ -202,8 +210,8 @@ def test_photometric_factor_by_hand():
 
 def test_quiet_sun_disk_centre_counts():
     """Counts from a flat continuum follow design §3.10 step by step."""
-    from gongsynth.filters import channel_responses
-    from gongsynth.scene import radiance_at_earth
+    from gongsynth.stages.filters import channel_responses
+    from gongsynth.stages.scene.scene import radiance_at_earth
 
     continuum = 3.0e14 * u.Unit("erg / (s cm2 sr cm)")  # Neckel & Labs, design §3.10
     lam = np.linspace(676.78 - 3, 676.78 + 3, 60001) * u.nm

@@ -1,9 +1,9 @@
-"""Tests of gongsynth.photosphere: the Photosphere container, its geometry and the model photosphere."""
+"""Tests of gongsynth.sun.photosphere: the Photosphere container, its geometry and the model photosphere."""
 import astropy.units as u
 import numpy as np
 import pytest
 
-from gongsynth.photosphere import Photosphere, model_photosphere
+from gongsynth.sun.photosphere import Photosphere, model_photosphere
 
 KMS = u.km / u.s
 

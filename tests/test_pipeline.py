@@ -6,8 +6,8 @@ import sunpy.map
 from sunpy.coordinates import frames
 
 import gongsynth
-from gongsynth.calibration import calibration_curve, robust_slope
-from gongsynth.maps import GONGSynthMap
+from gongsynth.analysis.calibration import calibration_curve, robust_slope
+from gongsynth.products.maps import GONGSynthMap
 
 # A 98 Mm tile like the paper's, coarsely sampled so the tests stay fast.
 SMALL = dict(detector_shape=96, duration=1 * u.min, photosphere_shape=(256, 256),
@@ -22,8 +22,8 @@ def disk_centre():
 @pytest.fixture(scope="module")
 def disk_centre_other_seed(disk_centre):
     """The same Sun (same photosphere and spectra) observed with other camera noise."""
-    from gongsynth.photosphere import model_photosphere, synthesize
-    from gongsynth.scene import viewing_geometry
+    from gongsynth.sun.photosphere import model_photosphere, synthesize
+    from gongsynth.geometry import viewing_geometry
     from gongsynth.seeding import child_sequence
 
     cfg = disk_centre.config
@@ -88,7 +88,7 @@ def test_sixty_degrees_is_foreshortened_and_placed(disk_centre, sixty):
 
 
 def _uniform(field, inclination):
-    from gongsynth.photosphere import Photosphere
+    from gongsynth.sun.photosphere import Photosphere
 
     ones = np.ones((32, 32))
     zero = 0 * ones * u.km / u.s
@@ -99,7 +99,7 @@ def _uniform(field, inclination):
 @pytest.mark.parametrize("field, expected", [(50 * u.G, 0.988), (1500 * u.G, 0.928)])
 def test_uniform_field_at_sixty_degrees(field, expected):
     """A vertical field seen at 60 deg: B_LOS = B/2, recovered up to the line physics."""
-    from gongsynth.photosphere import synthesize
+    from gongsynth.sun.photosphere import synthesize
 
     stokes = synthesize(_uniform(field, 0 * u.deg), mu=0.5, los_azimuth=-90 * u.deg)
     result = gongsynth.simulate(stokes, latitude=60 * u.deg, seed=5, detector_shape=32,
@@ -130,7 +130,7 @@ def test_same_seed_same_bits(disk_centre):
 
 
 def test_doppler_sign_for_an_upflow():
-    from gongsynth.photosphere import Photosphere, synthesize
+    from gongsynth.sun.photosphere import Photosphere, synthesize
 
     ones = np.ones((32, 32))
     zero = 0 * ones * u.km / u.s

@@ -1,17 +1,24 @@
-"""Tests of gongsynth.polarimetry: Mueller matrices and the filter-first collapse."""
+"""Tests of gongsynth.stages.channels: Mueller matrices and the filter-first collapse."""
 import astropy.units as u
 import numpy as np
 import pytest
 
+from gongsynth.geometry import Pointing
 from gongsynth import GONGInstrument
-from gongsynth import polarimetry
-from gongsynth.filters import channel_responses, channel_weights
-from gongsynth.optics import observe
-from gongsynth.photosphere import Photosphere, synthesize
-from gongsynth.polarimetry import (CHANNEL_UNIT, analyser_coefficients, channel_images,
-                                   polarized_spectra)
-from gongsynth.scene import radiance_at_earth, tile, tiled_scenes, viewing_geometry
-from gongsynth.stokes import RADIANCE_UNIT, StokesCube
+from gongsynth.stages import channels as polarimetry
+from gongsynth.stages.filters import channel_responses, channel_weights
+from gongsynth.stages.optics import observe
+from gongsynth.sun.photosphere import Photosphere, synthesize
+from gongsynth.stages.channels import (
+    CHANNEL_UNIT,
+    analyser_coefficients,
+    channel_images,
+    polarized_spectra,
+)
+from gongsynth.stages.scene.scene import radiance_at_earth
+from gongsynth.stages.scene.tiled import tile, tiled_scenes
+from gongsynth.geometry import viewing_geometry
+from gongsynth.sun.stokes import RADIANCE_UNIT, StokesCube
 
 LAM = np.linspace(676.73, 676.83, 51) * u.nm
 
@@ -110,7 +117,7 @@ def test_filter_first_equals_the_papers_literal_order():
     cube = synthesize(random_photosphere((16, 16), seed=5), mu=mu, los_azimuth=azimuth, instrument=inst)
     rng = np.random.default_rng(6)
     mueller = np.eye(4) + 0.02 * rng.normal(size=(cube.shape[2], 4, 4))  # chromatic cross-talk
-    geometry = dict(latitude=latitude, resolutions=(1, 2, 4, 8), detector_shape=12, instrument=inst)
+    geometry = dict(pointing=Pointing(latitude), resolutions=(1, 2, 4, 8), detector_shape=12, instrument=inst)
 
     # Filter first (gongsynth's order).
     planes = channel_images(cube, mueller=mueller, instrument=inst)

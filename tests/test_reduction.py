@@ -3,8 +3,8 @@ import numpy as np
 import pytest
 
 from gongsynth import GONGInstrument
-from gongsynth.detector import normalise_flat
-from gongsynth.reduction import reduce
+from gongsynth.stages.camera.detector import normalise_flat
+from gongsynth.stages.reduction import reduce
 
 GONG = GONGInstrument()
 

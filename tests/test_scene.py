@@ -1,4 +1,4 @@
-"""Tests of gongsynth.scene: tiling, geometry, WCS and radiometry."""
+"""Tests of gongsynth.stages.scene.tiled: tiling, geometry, WCS and radiometry."""
 import math
 
 import astropy.units as u
@@ -8,11 +8,14 @@ import sunpy.map
 from sunpy.coordinates import HeliographicStonyhurst, sun
 from sunpy.sun.constants import radius as R_SUN
 
-from gongsynth import scene as scene_mod
-from gongsynth.optics import convolve, psf_kernel
-from gongsynth.scene import (DEFAULT_OBSTIME, EARTH_RADIANCE_UNIT, field_centre, radiance_at_earth,
-                             sky_grid, tile, tiled_scene, tiled_scenes, viewing_geometry)
-from gongsynth.stokes import RADIANCE_UNIT, StokesCube
+from gongsynth.geometry import Pointing
+from gongsynth.stages.scene import tiled as scene_mod
+from gongsynth.stages.optics import convolve, psf_kernel
+from gongsynth.geometry import DEFAULT_OBSTIME, field_centre, viewing_geometry
+from gongsynth.stages.scene.scene import EARTH_RADIANCE_UNIT, radiance_at_earth, sky_grid
+from gongsynth.stages.channels import channel_images
+from gongsynth.stages.scene.tiled import tile, tiled_scenes
+from gongsynth.sun.stokes import RADIANCE_UNIT, StokesCube
 
 CHANNEL = u.Unit("erg / (s cm2 sr)")
 
@@ -75,7 +78,7 @@ def test_km_per_arcsec_is_the_distance_to_the_surface_point():
 @pytest.mark.parametrize("latitude", [60, -35])
 def test_wcs_puts_the_field_centre_at_the_latitude(latitude):
     tile_img = np.ones((6, 64, 64)) * 1e6 * CHANNEL
-    light, _ = tiled_scenes(tile_img, None, 96 * u.km, latitude=latitude * u.deg, detector_shape=40)
+    light, _ = tiled_scenes(tile_img, None, 96 * u.km, pointing=Pointing(latitude * u.deg), detector_shape=40)
     for header, shape in ((light.header, light.shape[1:]), (light.detector_header, light.detector_shape)):
         smap = sunpy.map.Map(np.zeros(shape), header)
         ny, nx = shape
@@ -90,7 +93,7 @@ def test_wcs_and_tiling_agree_on_the_foreshortened_scale():
     from sunpy.coordinates import get_earth
     latitude = 60
     light, _ = tiled_scenes(np.ones((6, 64, 64)) * CHANNEL, None, 96 * u.km,
-                            latitude=latitude * u.deg, resolutions=(1,), detector_shape=40)
+                            pointing=Pointing(latitude * u.deg), resolutions=(1,), detector_shape=40)
     kpa = light.meta["km_per_arcsec"].to_value(u.km / u.arcsec)
     smap = sunpy.map.Map(np.zeros(light.shape[1:]), light.header)
     c = (light.shape[1] - 1) / 2
@@ -124,7 +127,7 @@ def test_latitude_60_is_foreshortened_by_two_north_south():
     n, pixel = 64, 192 * u.km
     y, x = np.mgrid[:n, :n] + 0.5
     blob = np.exp(-((x - n / 2) ** 2 + (y - n / 2) ** 2) / (2 * 6.0**2))
-    sky = tile(blob, pixel, latitude=60 * u.deg, resolutions=(1,), detector_shape=24)
+    sky = tile(blob, pixel, pointing=Pointing(60 * u.deg), resolutions=(1,), detector_shape=24)
     ny, nx = sky.shape
     yy, xx = np.mgrid[:ny, :nx] - (ny - 1) / 2
     window = (np.abs(yy) < 8) & (np.abs(xx) < 16)  # half a period (16.7 × 33.5 samples)
@@ -144,7 +147,7 @@ def test_latitude_60_is_foreshortened_by_two_north_south():
 def test_quadrants_magnify_the_tile_by_their_resolution(axis):
     n, pixel = 64, 92 * u.km
     latitude = 60 * u.deg
-    sky = tile(sinusoid_tile(n, axis), pixel, latitude=latitude, resolutions=(1, 2, 4, 8),
+    sky = tile(sinusoid_tile(n, axis), pixel, pointing=Pointing(latitude), resolutions=(1, 2, 4, 8),
                detector_shape=128)
     _, kpa = field_centre(latitude)
     mu, _ = viewing_geometry(latitude)
@@ -189,7 +192,7 @@ def test_tiling_conserves_the_mean_over_whole_periods_and_is_periodic():
     pixel = field / 2 * kpa.to_value(u.km / u.arcsec) / n * u.km  # two tiles across the field
     rng = np.random.default_rng(7)
     planes = rng.gamma(2.0, size=(6, n, n)) * 1e6 * CHANNEL
-    kwargs = dict(latitude=0 * u.deg, resolutions=(1,), detector_shape=det, shape=(76, 76))
+    kwargs = dict(pointing=Pointing(0 * u.deg), resolutions=(1,), detector_shape=det, shape=(76, 76))
     light, _ = tiled_scenes(planes, None, pixel, **kwargs)
     assert light.boundary == "periodic"  # whole tiles (μ = cos B0 = 1 - 1e-12)
     sky = tile(planes, pixel, **kwargs).value
@@ -203,7 +206,7 @@ def test_truth_is_placed_exactly_like_the_light():
     rng = np.random.default_rng(8)
     planes = rng.gamma(2.0, size=(6, 32, 32)) * 1e6 * CHANNEL
     blos = planes[2].value * 1e-4 * u.G
-    light, truth = tiled_scenes(planes, blos, 150 * u.km, latitude=30 * u.deg, detector_shape=20)
+    light, truth = tiled_scenes(planes, blos, 150 * u.km, pointing=Pointing(30 * u.deg), detector_shape=20)
     factor = radiance_at_earth(1e4 * CHANNEL).value
     assert truth.data.unit == u.G and truth.shape == light.shape[1:]
     assert np.allclose(truth.data.value * factor, light.data[2].value, rtol=1e-12)
@@ -228,12 +231,17 @@ def test_tiled_scene_from_a_stokes_cube():
     level = np.full((16, 16, 51), 3e14, dtype=np.float32) * RADIANCE_UNIT
     cube = StokesCube(level, 0 * level, 0 * level, 0 * level, lam, 300 * u.km, mu=0.5,
                       blos=np.full((16, 16), 100.0, dtype=np.float32) * u.G)
-    scene = tiled_scene(cube, latitude=60 * u.deg, detector_shape=12)
+    pointing = Pointing(60 * u.deg)
+    pointing.check_mu(cube.mu)
+    scene, _ = tiled_scenes(channel_images(cube), cube.blos, cube.pixel_size, pointing=pointing,
+                            detector_shape=12)
     assert scene.shape == (6, 60, 60)
     assert np.allclose(scene.blos.value, 100.0)
     assert np.allclose(scene.data[0].value, scene.data[0].value.mean())
     with pytest.raises(ValueError, match="mu"):
-        tiled_scene(cube, latitude=0 * u.deg, detector_shape=12)
+        Pointing(0 * u.deg).check_mu(cube.mu)
+    with pytest.raises(ValueError, match="per-column mu"):
+        Pointing(0 * u.deg).check_mu(np.ones((2, 2)))
 
 
 def test_sky_grid_sizes():
@@ -247,7 +255,7 @@ def test_sky_grid_sizes():
 @pytest.mark.parametrize("latitude", [90, -90, 95, -120])
 def test_latitude_out_of_range(latitude):
     with pytest.raises(ValueError, match="latitude"):
-        tile(np.ones((8, 8)), 1000 * u.km, latitude=latitude * u.deg, detector_shape=8)
+        tile(np.ones((8, 8)), 1000 * u.km, pointing=Pointing(latitude * u.deg), detector_shape=8)
 
 
 def test_tile_smaller_than_a_pixel_is_rejected():
@@ -256,7 +264,7 @@ def test_tile_smaller_than_a_pixel_is_rejected():
         tile(np.ones((8, 8)), 150 * u.km, detector_shape=8)
     # Big enough face-on, too small once foreshortened at 80 deg.
     with pytest.raises(ValueError, match="smaller than one"):
-        tile(np.ones((8, 8)), 400 * u.km, latitude=80 * u.deg, detector_shape=8)
+        tile(np.ones((8, 8)), 400 * u.km, pointing=Pointing(80 * u.deg), detector_shape=8)
 
 
 def test_other_bad_input():
@@ -274,8 +282,6 @@ def test_other_bad_input():
         tile(np.full((8, 8), np.nan), 1000 * u.km, detector_shape=8)
     with pytest.raises(ValueError, match="blos"):
         tiled_scenes(np.ones((6, 8, 8)) * CHANNEL, np.ones((4, 4)) * u.G, 1000 * u.km, detector_shape=8)
-    with pytest.raises(TypeError, match="StokesCube"):
-        tiled_scene(np.ones((6, 8, 8)) * CHANNEL)
 
 
 def test_module_exports():

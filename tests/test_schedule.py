@@ -4,7 +4,7 @@ import pytest
 
 from gongsynth import GONGInstrument
 from gongsynth.planes import plane_index
-from gongsynth.schedule import dither_sequence, frame_schedule, n_frames_in
+from gongsynth.stages.camera.schedule import dither_sequence, frame_schedule, n_frames_in
 
 GONG = GONGInstrument()
 

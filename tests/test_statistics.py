@@ -11,8 +11,8 @@ import sunpy.map
 from astropy.coordinates import SkyCoord
 from sunpy.coordinates import frames
 
-from gongsynth.observations import BadHeaderWarning, load_observation
-from gongsynth.statistics import (
+from gongsynth.analysis.observations import BadHeaderWarning, load_observation
+from gongsynth.analysis.statistics import (
     MAD_TO_SIGMA,
     disk_centre_level,
     disk_coordinates,

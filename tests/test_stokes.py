@@ -1,4 +1,4 @@
-"""Tests of gongsynth.stokes (StokesCube) and gongsynth.stokes_io (FITS and RH 1.5D files)."""
+"""Tests of gongsynth.sun.stokes (StokesCube) and gongsynth.sun.stokes_files (FITS and RH 1.5D files)."""
 import astropy.constants as const
 import astropy.units as u
 import h5py
@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from astropy.io import fits
 
-from gongsynth.stokes import RADIANCE_UNIT, StokesCube
-from gongsynth.stokes_io import read_fits, read_rh15d, write_fits
+from gongsynth.sun.stokes import RADIANCE_UNIT, StokesCube
+from gongsynth.sun.stokes_files import read_fits, read_rh15d, write_fits
 
 LAM = np.linspace(676.73, 676.83, 51) * u.nm
 RH_UNIT = u.Unit("J / (s m2 Hz sr)")

@@ -1,13 +1,19 @@
-"""Tests of the Milne–Eddington synthesis (gongsynth.photosphere.synthesize) against physics."""
+"""Tests of the Milne–Eddington synthesis (gongsynth.sun.photosphere.synthesize) against physics."""
 import astropy.constants as const
 import astropy.units as u
 import numpy as np
 import pytest
 
 from gongsynth import GONGInstrument
-from gongsynth.photosphere import NiLine, Photosphere, model_photosphere, synthesize, zeeman_splitting
-from gongsynth.photosphere.line import NECKEL_LABS_676
-from gongsynth.stokes import RADIANCE_UNIT
+from gongsynth.sun.photosphere import (
+    NiLine,
+    Photosphere,
+    model_photosphere,
+    synthesize,
+    zeeman_splitting,
+)
+from gongsynth.sun.photosphere.line import NECKEL_LABS_676
+from gongsynth.sun.stokes import RADIANCE_UNIT
 
 LAM0 = 676.78  # nm
 FINE = np.linspace(676.70, 676.86, 1601) * u.nm          # 0.1 pm steps
@@ -230,8 +236,8 @@ def test_output_cube_metadata_and_default_grid():
     assert cube.pixel_size == 3072 * u.km and cube.mu == 0.8
     assert cube.I.dtype == np.float32 and cube.I.unit == RADIANCE_UNIT
     np.testing.assert_allclose(cube.blos.value, ph.los_field(0.8).value, rtol=1e-5, atol=1e-3)
-    assert cube.meta["origin"] == "gongsynth.photosphere.synthesize"
-    assert cube.meta["photosphere"]["origin"] == "gongsynth.photosphere.model_photosphere"
+    assert cube.meta["origin"] == "gongsynth.sun.photosphere.synthesize"
+    assert cube.meta["photosphere"]["origin"] == "gongsynth.sun.photosphere.model_photosphere"
 
 
 def test_bad_input_is_rejected():
@@ -268,7 +274,7 @@ def test_me_line_is_realistic_against_lightweaver_falc():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")        # lightweaver warns on import without a config file
         pytest.importorskip("lightweaver")
-    from gongsynth.photosphere.reference import falc_stokes
+    from gongsynth.sun.photosphere.reference import falc_stokes
 
     lam = np.linspace(676.70, 676.86, 321) * u.nm
     fields = np.array([0.0, 100.0, 1000.0])

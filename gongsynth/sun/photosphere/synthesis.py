@@ -3,7 +3,7 @@ Milne–Eddington synthesis of Ni I 676.78 nm: Photosphere → StokesCube.
 
 For each column the field is projected on the viewing geometry: γ is the angle
 between B and the line of sight n, χ the azimuth of its sky projection from e1
-(see `gongsynth.photosphere.geometry`).  The normal Zeeman triplet with the
+(see `gongsynth.geometry`).  The normal Zeeman triplet with the
 effective Landé factor g splits by
 
 .. math:: \Delta\lambda_B = \frac{e\,\lambda_0^2\,g\,B}{4\pi m_e c^2}
@@ -24,13 +24,13 @@ import astropy.units as u
 import numpy as np
 from scipy.special import wofz
 
-from ..instrument import GONGInstrument
-from ..stokes import RADIANCE_UNIT, StokesCube
-from ..validation import check_wavelength_grid
-from ._kernel import me_kernel, voigt_table
-from .columns import Photosphere
-from .geometry import check_geometry, los_basis
-from .line import NiLine
+from gongsynth.instrument import GONGInstrument
+from gongsynth.sun.stokes import RADIANCE_UNIT, StokesCube
+from gongsynth.validation import check_wavelength_grid
+from gongsynth.sun.photosphere._kernel import me_kernel, voigt_table
+from gongsynth.sun.photosphere.columns import Photosphere
+from gongsynth.geometry import check_geometry, los_basis
+from gongsynth.sun.photosphere.line import NiLine
 
 __all__ = ["synthesize", "default_wavelength", "zeeman_splitting"]
 
@@ -150,7 +150,7 @@ def synthesize(photosphere, mu=1.0, wavelength=None, *, los_azimuth=-90 * u.deg,
 
     Parameters
     ----------
-    photosphere : `~gongsynth.photosphere.Photosphere`
+    photosphere : `~gongsynth.sun.photosphere.Photosphere`
         Field, velocity and continuum per column.
     mu : float or array_like (ny, nx), optional
         Cosine of the viewing angle, in (0, 1] (default 1, disk centre); an
@@ -164,7 +164,7 @@ def synthesize(photosphere, mu=1.0, wavelength=None, *, los_azimuth=-90 * u.deg,
     instrument : `~gongsynth.GONGInstrument`, optional
         Source of the rest wavelength (``line_wavelength``) and of the Landé
         factor (``lande_g``, unless ``line.lande_g`` is set).
-    line : `~gongsynth.photosphere.NiLine`, optional
+    line : `~gongsynth.sun.photosphere.NiLine`, optional
         Milne–Eddington line parameters (default `NiLine()`).
     method : {"numba", "numpy"}, optional
         "numba" (default): the parallel kernel with a tabulated Voigt function;
@@ -173,7 +173,7 @@ def synthesize(photosphere, mu=1.0, wavelength=None, *, los_azimuth=-90 * u.deg,
 
     Returns
     -------
-    `~gongsynth.stokes.StokesCube`
+    `~gongsynth.sun.stokes.StokesCube`
         (ny, nx, nλ) float32 spectra in erg s⁻¹ cm⁻² sr⁻¹ cm⁻¹, with ``mu``,
         the photosphere's pixel size, ``blos`` = B·n (G, the ground truth) and
         ``meta`` recording the line parameters and geometry.
@@ -189,7 +189,7 @@ def synthesize(photosphere, mu=1.0, wavelength=None, *, los_azimuth=-90 * u.deg,
     Examples
     --------
     >>> import numpy as np, astropy.units as u
-    >>> from gongsynth.photosphere import Photosphere, synthesize
+    >>> from gongsynth.sun.photosphere import Photosphere, synthesize
     >>> ones = np.ones((1, 2))
     >>> ph = Photosphere([[0, 1000]] * u.G, 0 * ones * u.deg, 0 * ones * u.deg, 0 * ones * u.km / u.s,
     ...                  0 * ones * u.km / u.s, 0 * ones * u.km / u.s, ones, 96 * u.km)
@@ -201,7 +201,7 @@ def synthesize(photosphere, mu=1.0, wavelength=None, *, los_azimuth=-90 * u.deg,
     0.67
     """
     if not isinstance(photosphere, Photosphere):
-        raise TypeError(f"photosphere must be a gongsynth.photosphere.Photosphere, "
+        raise TypeError(f"photosphere must be a gongsynth.sun.photosphere.Photosphere, "
                         f"got {type(photosphere).__name__}")
     if method not in _METHODS:
         raise ValueError(f"method must be one of {_METHODS}, got {method!r}")
@@ -235,7 +235,7 @@ def synthesize(photosphere, mu=1.0, wavelength=None, *, los_azimuth=-90 * u.deg,
                 dst[rows] = src
     del cols
     meta = {
-        "origin": "gongsynth.photosphere.synthesize",
+        "origin": "gongsynth.sun.photosphere.synthesize",
         "method": f"Milne-Eddington ({method})",
         "line_wavelength_nm": float(instrument.line_wavelength.to_value(u.nm)),
         "lande_g": g,

@@ -44,9 +44,9 @@ import astropy.units as u
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..seeding import as_seed_sequence, stage_generator
-from ..validation import check_quantity
-from .columns import Photosphere
+from gongsynth.seeding import as_seed_sequence, stage_generator
+from gongsynth.validation import check_quantity
+from gongsynth.sun.photosphere.columns import Photosphere
 
 __all__ = ["model_photosphere"]
 
@@ -336,7 +336,7 @@ def model_photosphere(*, shape=(1024, 1024), pixel_size=96 * u.km, seed=0, spot=
 
     Returns
     -------
-    `~gongsynth.photosphere.Photosphere`
+    `~gongsynth.sun.photosphere.Photosphere`
         Periodic; ``meta`` holds the parameters and the seed entropy.
 
     Raises
@@ -492,7 +492,7 @@ def model_photosphere(*, shape=(1024, 1024), pixel_size=96 * u.km, seed=0, spot=
     comps = {k: _block_mean(v, sub) for k, v in comps.items()}
     comps["continuum"] = np.maximum(comps["continuum"], 0.0)
     meta = {
-        "origin": "gongsynth.photosphere.model_photosphere",
+        "origin": "gongsynth.sun.photosphere.model_photosphere",
         "seed_entropy": str(root.entropy),
         "internal_pixel_km": grid.dx,
         "params": {

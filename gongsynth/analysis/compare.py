@@ -12,7 +12,7 @@ or, from files, `compare_files` (behind ``gongsynth compare SIM.fits OBS.fits``)
 
 `degrade_to_gong` brings a higher-resolution observation to GONG's view: the
 GONG PSF (Airy pattern of the 2.8 cm aperture at λ0 ⊗ Gaussian seeing, from
-`gongsynth.optics.psf_kernel`) applied at the observation's own sampling, then
+`gongsynth.stages.optics.psf_kernel`) applied at the observation's own sampling, then
 area-weighted (flux-conserving) binning onto 2.5″ pixels whose grid shares
 the observation's tangent point.  The magnetogram is treated as a linear
 signal (B_LOS convolved like an intensity), the usual approximation for
@@ -20,8 +20,8 @@ weak-field magnetograms; the observation's own PSF stays in (HMI's ~1″ adds
 ~1 % to the width, MDI's ~4″ more: see ``native_fwhm``).
 
 The statistics (histograms, noise, limb darkening) live in
-`gongsynth.statistics`, the file reading and header checks in
-`gongsynth.observations`; they are re-exported here.
+`gongsynth.analysis.statistics`, the file reading and header checks in
+`gongsynth.analysis.observations`; they are re-exported here.
 """
 import json
 import math
@@ -38,10 +38,10 @@ import sunpy.map
 from astropy.coordinates import SkyCoord
 from sunpy.coordinates import frames
 
-from .instrument import resolve_instrument
-from .observations import BadHeaderWarning, load_observation
-from .statistics import _disk_values, _histogram  # one disk mask for both histograms
-from .statistics import (
+from gongsynth.instrument import resolve_instrument
+from gongsynth.analysis.observations import BadHeaderWarning, load_observation
+from gongsynth.analysis.statistics import _disk_values, _histogram  # one disk mask for both histograms
+from gongsynth.analysis.statistics import (
     LimbDarkeningProfile,
     disk_centre_level,
     field_histogram,
@@ -49,7 +49,7 @@ from .statistics import (
     local_pixel_scale,
     noise_estimate,
 )
-from .validation import check_quantity
+from gongsynth.validation import check_quantity
 
 __all__ = [
     "BadHeaderWarning",
@@ -125,7 +125,7 @@ def _kernel(psf, scale, inst, native_fwhm):
             raise ValueError("native_fwhm applies to the instrument PSF; it cannot be used with psf=False")
         return None
     if psf is None:
-        from .optics import psf_kernel  # imported here: optics is heavier than this module needs
+        from gongsynth.stages.optics import psf_kernel  # imported here: optics is heavier than this module needs
 
         if native_fwhm is not None:
             check_quantity(native_fwhm, u.arcsec, "native_fwhm")
@@ -147,7 +147,7 @@ def _kernel(psf, scale, inst, native_fwhm):
 def _masked_convolve(data, kernel):
     """Normalised convolution: the kernel-weighted mean of the finite pixels around each pixel."""
     valid = np.isfinite(data)
-    # Kernel centre at (ky // 2, kx // 2), as gongsynth.optics samples it: pad even sides at
+    # Kernel centre at (ky // 2, kx // 2), as gongsynth.stages.optics samples it: pad even sides at
     # the end so that the centre is the middle sample, which mode="same" keeps in place.
     ky, kx = kernel.shape
     kernel = np.pad(kernel, ((0, 1 - ky % 2), (0, 1 - kx % 2)))
@@ -217,7 +217,7 @@ def degrade_to_gong(smap, instrument=None, *, psf=None, native_fwhm=None, min_co
     instrument : `~gongsynth.GONGInstrument`, optional
         Supplies ``plate_scale``, aperture, wavelength and seeing.
     psf : None, False, callable or array_like
-        ``None``: the GONG PSF, `gongsynth.optics.psf_kernel`; ``False``: no
+        ``None``: the GONG PSF, `gongsynth.stages.optics.psf_kernel`; ``False``: no
         PSF (pixel binning only); a callable ``psf(pixel_scale) -> kernel``
         (``pixel_scale`` in arcsec); or a kernel array already sampled at the
         map's pixel scale, centred at ``(ky // 2, kx // 2)``.  Normalised to
@@ -314,11 +314,11 @@ class MapSummary:
         Pixel side at disk centre (arcsec), after any degradation.
     degraded : bool
         Whether `degrade_to_gong` was applied.
-    histogram : `~gongsynth.statistics.FieldHistogram`
+    histogram : `~gongsynth.analysis.statistics.FieldHistogram`
         Signed on-disk histogram (mean, std, robust sigma, percentiles).
-    abs_histogram : `~gongsynth.statistics.FieldHistogram`
+    abs_histogram : `~gongsynth.analysis.statistics.FieldHistogram`
         Histogram of |B| on log-spaced bins.
-    noise : `~gongsynth.statistics.NoiseEstimate`
+    noise : `~gongsynth.analysis.statistics.NoiseEstimate`
         Quiet-box noise near disk centre.
     map : `~sunpy.map.GenericMap`
         The map that was measured (degraded if ``degraded``), in G.
@@ -403,8 +403,8 @@ def summarize_map(smap, label, *, instrument=None, degrade="auto", noise_box=60 
     --------
     >>> import numpy as np
     >>> import astropy.units as u
-    >>> from gongsynth.maps import make_product_map
-    >>> from gongsynth.scene import field_centre
+    >>> from gongsynth.products.maps import make_product_map
+    >>> from gongsynth.geometry import field_centre
     >>> noise = np.random.default_rng(1).normal(0, 3, (200, 200)) * u.G
     >>> sim = make_product_map(noise, centre=field_centre(0 * u.deg)[0], scale=2.5 * u.arcsec,
     ...                        product="magnetogram")
@@ -702,8 +702,8 @@ def compare_files(sim_path, obs_path, *, out=None, overwrite=False, instrument=N
     >>> import tempfile, pathlib
     >>> import numpy as np
     >>> import astropy.units as u
-    >>> from gongsynth.maps import make_product_map
-    >>> from gongsynth.scene import field_centre
+    >>> from gongsynth.products.maps import make_product_map
+    >>> from gongsynth.geometry import field_centre
     >>> folder = pathlib.Path(tempfile.mkdtemp())
     >>> rng = np.random.default_rng(2)
     >>> for name, sigma in (("a.fits", 3), ("b.fits", 6)):
@@ -746,7 +746,7 @@ class LimbDarkeningComparison:
 
     Attributes
     ----------
-    sim, obs : `~gongsynth.statistics.LimbDarkeningProfile`
+    sim, obs : `~gongsynth.analysis.statistics.LimbDarkeningProfile`
         Profiles normalised to each map's own disk-centre level, on the same μ bins.
     max_difference, rms_difference : float
         Largest and rms |I_sim/I_sim(0) - I_obs/I_obs(0)| over the μ bins both maps fill.
@@ -796,7 +796,7 @@ def compare_limb_darkening(sim_map, obs_map, *, instrument=None, degrade="auto",
     >>> import numpy as np, astropy.units as u, sunpy.map
     >>> from astropy.coordinates import SkyCoord
     >>> from sunpy.coordinates import frames
-    >>> from gongsynth.statistics import disk_coordinates
+    >>> from gongsynth.analysis.statistics import disk_coordinates
     >>> ref = SkyCoord(0 * u.arcsec, 0 * u.arcsec, frame=frames.Helioprojective,
     ...                observer="earth", obstime="2020-01-01")
     >>> hdr = sunpy.map.make_fitswcs_header((200, 200), ref, scale=[10, 10] * u.arcsec / u.pix)

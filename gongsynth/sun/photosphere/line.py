@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import astropy.units as u
 import numpy as np
 
-from ..validation import check_quantity
+from gongsynth.validation import check_quantity
 
 __all__ = ["NiLine", "NECKEL_LABS_676"]
 

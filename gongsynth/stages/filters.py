@@ -29,9 +29,9 @@ import math
 import astropy.units as u
 import numpy as np
 
-from .instrument import resolve_instrument
-from .planes import N_CHANNELS
-from .validation import check_quantity, check_wavelength_grid
+from gongsynth.instrument import resolve_instrument
+from gongsynth.planes import N_CHANNELS
+from gongsynth.validation import check_quantity, check_wavelength_grid
 
 __all__ = [
     "prefilter_transmission",

@@ -27,124 +27,20 @@ rms (see `full_disk_scene`).
 """
 import math
 import warnings
-from collections import namedtuple
 
 import astropy.units as u
 import numpy as np
 from astropy.coordinates import SkyCoord
 
-from .instrument import resolve_instrument
-from .planes import N_PLANES
-from .scene import Scene, _obstime, radiance_at_earth, sky_grid, wcs_header
-from .validation import check_quantity
+from gongsynth.geometry import as_obstime, disk_geometry, wcs_header
+from gongsynth.instrument import resolve_instrument
+from gongsynth.planes import N_PLANES
+from gongsynth.stages.channels import CHANNEL_UNIT
+from gongsynth.stages.scene.scene import Scene, radiance_at_earth, sky_grid
+from gongsynth.sun.photosphere import Photosphere
+from gongsynth.validation import check_quantity
 
-__all__ = ["DiskGeometry", "disk_geometry", "full_disk_scene"]
-
-#: Per-sample geometry of a full-disk grid (arrays of the grid's shape).
-DiskGeometry = namedtuple("DiskGeometry", ["on_disk", "mu", "los_azimuth", "longitude", "latitude",
-                                           "x", "y"])
-DiskGeometry.__doc__ = """
-Geometry of each sample of a full-disk grid.
-
-Attributes
-----------
-on_disk : `numpy.ndarray` of bool
-    The line of sight meets the solar sphere (and μ > 0).
-mu : `numpy.ndarray`
-    Cosine of the angle between the local vertical and the direction to the
-    observer (0 off the disk).
-los_azimuth : `numpy.ndarray`
-    Azimuth of the direction to the observer, deg, from local west toward north.
-longitude, latitude : `numpy.ndarray`
-    Heliographic Stonyhurst coordinates, deg (NaN off the disk).
-x, y : `numpy.ndarray`
-    Position in the photosphere's plane, km (sinusoidal projection; NaN off the disk).
-
-Examples
---------
->>> import astropy.units as u
->>> g = disk_geometry((3, 3), 700 * u.arcsec)   # the corners are beyond the limb
->>> int(g.on_disk.sum()), round(float(g.latitude[2, 1]), 1)
-(5, 47.6)
-"""
-
-
-def _observer(obstime):
-    from sunpy.coordinates import get_earth, sun
-    from sunpy.sun.constants import radius
-    time = _obstime(obstime)
-    distance = get_earth(time).radius.to_value(u.km)
-    b0 = sun.B0(time).to_value(u.rad)
-    return time, distance, float(b0), radius.to_value(u.km)
-
-
-def disk_geometry(shape, pixel_scale, *, obstime=None, rows=None):
-    """
-    Trace every sample of a grid centred on the Sun to the solar sphere.
-
-    Pixel (i, j) looks along the gnomonic (TAN) direction of helioprojective
-    offsets ((j - (nx-1)/2) × pixel_scale, (i - (ny-1)/2) × pixel_scale) from
-    the Sun's centre, solar north up, as in the scene's WCS.
-
-    Parameters
-    ----------
-    shape : (int, int)
-        (ny, nx) of the grid.
-    pixel_scale : `~astropy.units.Quantity`
-        Arcsec per sample.
-    obstime : `~astropy.time.Time` or str, optional
-        Observer at Earth at this time; default `gongsynth.scene.DEFAULT_OBSTIME`.
-    rows : slice, optional
-        Only these rows (for chunked processing).
-
-    Returns
-    -------
-    `DiskGeometry`
-
-    Examples
-    --------
-    >>> import astropy.units as u
-    >>> g = disk_geometry((5, 5), 400 * u.arcsec)
-    >>> float(g.mu[2, 2]), bool(g.on_disk[0, 0])
-    (1.0, False)
-    """
-    check_quantity(pixel_scale, u.arcsec, "pixel_scale")
-    ny, nx = shape
-    rows = slice(0, ny) if rows is None else rows
-    _, dist, b0, radius = _observer(obstime)
-    h = pixel_scale.to_value(u.rad)
-    yy = (np.arange(ny)[rows] - (ny - 1) / 2) * h
-    xx = (np.arange(nx) - (nx - 1) / 2) * h
-    x, y = np.meshgrid(xx, yy)
-    q = x * x + y * y
-    norm = np.sqrt(1 + q)
-    # Ray from the observer (0, 0, D) along (x, y, -1)/norm in heliocentric-
-    # Cartesian axes; the discriminant written without cancellation.
-    disc = radius**2 - dist**2 * q / (1 + q)
-    on = disc > 0
-    t = np.where(on, dist / norm - np.sqrt(np.where(on, disc, 0.0)), np.nan)
-    px, py, pz = t * x / norm, t * y / norm, dist - t / norm
-    cb, sb = math.cos(b0), math.sin(b0)
-
-    def to_hgs(a, b, c):  # HCC (x west, y north, z to observer) -> Stonyhurst Cartesian
-        return c * cb - b * sb, a, c * sb + b * cb
-
-    X, Y, Z = to_hgs(px, py, pz)
-    lat = np.arcsin(np.clip(Z / radius, -1, 1))
-    lon = np.arctan2(Y, X)
-    nX, nY, nZ = to_hgs(-x / norm, -y / norm, 1 / norm)  # unit vector toward the observer
-    mu = (nX * X + nY * Y + nZ * Z) / radius
-    west = -np.sin(lon) * nX + np.cos(lon) * nY
-    north = -np.sin(lat) * (np.cos(lon) * nX + np.sin(lon) * nY) + np.cos(lat) * nZ
-    on &= mu > 0
-    off = ~on
-    mu = np.where(on, np.minimum(mu, 1.0), 0.0)
-    azimuth = np.degrees(np.arctan2(north, west))
-    lon, lat = np.where(on, lon, np.nan), np.where(on, lat, np.nan)
-    xs, ys = radius * lon * np.cos(lat), radius * lat
-    azimuth[off] = np.nan
-    return DiskGeometry(on, mu, azimuth, np.degrees(lon), np.degrees(lat), xs, ys)
-
+__all__ = ["full_disk_scene"]
 
 def _column_index(geom_x, geom_y, ny, nx, pixel_km):
     """Periodic column of the photosphere under each point; tile centre at disk centre."""
@@ -163,7 +59,7 @@ class _CubeInterpolator:
     """Channel images and truth of cubes at several μ, linearly interpolated in μ."""
 
     def __init__(self, cubes, mueller, inst):
-        from .polarimetry import channel_images
+        from gongsynth.stages.channels import channel_images
         cubes = sorted(cubes, key=lambda c: float(c.mu))
         first = cubes[0]
         for c in cubes:
@@ -208,8 +104,8 @@ class _Synthesiser:
         self.wavelength, self.mueller, self.inst = wavelength, mueller, inst
 
     def __call__(self, iy, ix, mu, azimuth):
-        from .photosphere import synthesize
-        from .polarimetry import channel_images
+        from gongsynth.sun.photosphere import synthesize
+        from gongsynth.stages.channels import channel_images
         columns = self.photosphere[iy[None, :], ix[None, :]]
         cube = synthesize(columns, mu=mu[None, :], los_azimuth=azimuth[None, :] * u.deg,
                           wavelength=self.wavelength, instrument=self.inst)
@@ -225,14 +121,14 @@ def full_disk_scene(source, *, obstime=None, instrument=None, detector_shape=Non
 
     Parameters
     ----------
-    source : `~gongsynth.photosphere.Photosphere` or sequence of `~gongsynth.stokes.StokesCube`
+    source : `~gongsynth.sun.photosphere.Photosphere` or sequence of `~gongsynth.sun.stokes.StokesCube`
         A (periodic) photosphere, synthesised at every sample's own μ and
         line-of-sight azimuth; or cubes of one patch at several μ, whose
         channel images are interpolated linearly in μ (each cube keeps the
         azimuth it was made with; samples beyond the cubes' μ range take the
         nearest cube, with a warning).
     obstime : `~astropy.time.Time` or str, optional
-        Observer at Earth; default `gongsynth.scene.DEFAULT_OBSTIME` (B0 ≈ 0).
+        Observer at Earth; default `gongsynth.geometry.DEFAULT_OBSTIME` (B0 ≈ 0).
     instrument : `~gongsynth.GONGInstrument`, optional
     detector_shape : int or (int, int), optional
         Detector pixels; default ``instrument.detector_shape`` (860, GONG's field).
@@ -247,7 +143,7 @@ def full_disk_scene(source, *, obstime=None, instrument=None, detector_shape=Non
     wavelength : `~astropy.units.Quantity`, optional
         Synthesis grid (default: the paper's 51 points).
     mueller : array_like, optional
-        Instrument Mueller matrix (`gongsynth.polarimetry.channel_images`).
+        Instrument Mueller matrix (`gongsynth.stages.channels.channel_images`).
     chunk_size : int, optional
         Samples synthesised at once (memory ≈ 0.8 kB per sample).
     progress : bool, optional
@@ -255,16 +151,16 @@ def full_disk_scene(source, *, obstime=None, instrument=None, detector_shape=Non
 
     Returns
     -------
-    light : `~gongsynth.scene.Scene`
+    light : `~gongsynth.stages.scene.scene.Scene`
         Radiance at Earth per arcsec² (6, NY, NX), zero beyond the limb,
         boundary ``"zero"``, WCS centred on the Sun.
-    truth : `~gongsynth.scene.Scene` or None
+    truth : `~gongsynth.stages.scene.scene.Scene` or None
         True B_LOS (NY, NX) in G at the same samples (0 beyond the limb).
 
     Examples
     --------
     >>> import numpy as np, astropy.units as u
-    >>> from gongsynth.photosphere import Photosphere
+    >>> from gongsynth.sun.photosphere import Photosphere
     >>> ones = np.ones((8, 8))
     >>> ph = Photosphere(100 * ones * u.G, 0 * ones * u.deg, 0 * ones * u.deg, 0 * ones * u.km / u.s,
     ...                  0 * ones * u.km / u.s, 0 * ones * u.km / u.s, ones, 500 * u.km, periodic=True)
@@ -273,7 +169,6 @@ def full_disk_scene(source, *, obstime=None, instrument=None, detector_shape=Non
     >>> light.shape, float(truth.data[12, 12].to_value(u.G)) > 99
     ((6, 24, 24), True)
     """
-    from .photosphere import Photosphere
     inst = resolve_instrument(instrument)
     if supersampling is None:
         supersampling = inst.supersampling
@@ -322,15 +217,14 @@ def full_disk_scene(source, *, obstime=None, instrument=None, detector_shape=Non
         warnings.warn(
             f"{outside} on-disk samples have mu outside the cubes' range [{engine.mu[0]:.3g}, "
             f"{engine.mu[-1]:.3g}]: they use the nearest cube (no extrapolation)", stacklevel=2)
-    from .polarimetry import CHANNEL_UNIT
     # In place: the scene is large.
     light *= radiance_at_earth(1 * CHANNEL_UNIT).value
     data = u.Quantity(light, radiance_at_earth(1 * CHANNEL_UNIT).unit, copy=False)
-    time = _obstime(obstime)
+    time = as_obstime(obstime)
     from sunpy.coordinates import Helioprojective, get_earth
     centre = SkyCoord(0 * u.arcsec, 0 * u.arcsec,
                       frame=Helioprojective(observer=get_earth(time), obstime=time))
-    header = wcs_header(grid, scale, centre, inst)
+    header = wcs_header(grid, scale, centre, wavelength=inst.line_wavelength)
 
     def placer(stack, size):
         return _place(stack, size, grid, scale, obstime, chunk_size)

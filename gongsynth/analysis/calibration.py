@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import astropy.units as u
 import numpy as np
 
-from .seeding import stage_generator
+from gongsynth.seeding import stage_generator
 
 __all__ = ["CalibrationFit", "CalibrationCurve", "robust_slope", "calibration_curve",
            "calibration_vs_latitude"]

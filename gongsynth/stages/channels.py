@@ -23,10 +23,10 @@ analyser; the effective area (0.6 cm², tuned to real GONG counts) absorbs it.
 import astropy.units as u
 import numpy as np
 
-from .filters import channel_weights
-from .instrument import resolve_instrument
-from .planes import N_CHANNELS, N_PLANES, N_POLARISATIONS
-from .validation import check_finite
+from gongsynth.stages.filters import channel_weights
+from gongsynth.instrument import resolve_instrument
+from gongsynth.planes import N_CHANNELS, N_PLANES, N_POLARISATIONS
+from gongsynth.validation import check_finite
 
 __all__ = ["CHANNEL_UNIT", "IDEAL_MUELLER", "analyser_coefficients", "polarized_spectra",
            "channel_images"]
@@ -108,7 +108,7 @@ def _coefficients_for(stokes, mueller):
 
 def _stokes_arrays(stokes):
     """The four Stokes arrays (ny, nx, nλ) as plain arrays in erg/(s cm2 sr cm)."""
-    from .stokes import RADIANCE_UNIT
+    from gongsynth.sun.stokes import RADIANCE_UNIT
     return [getattr(stokes, name).to_value(RADIANCE_UNIT) for name in ("I", "Q", "U", "V")]
 
 
@@ -121,7 +121,7 @@ def polarized_spectra(stokes, *, mueller=None):
 
     Parameters
     ----------
-    stokes : `~gongsynth.stokes.StokesCube`
+    stokes : `~gongsynth.sun.stokes.StokesCube`
     mueller : array_like, optional
         As in `analyser_coefficients`.
 
@@ -133,14 +133,14 @@ def polarized_spectra(stokes, *, mueller=None):
     Examples
     --------
     >>> import numpy as np, astropy.units as u
-    >>> from gongsynth.stokes import StokesCube
+    >>> from gongsynth.sun.stokes import StokesCube
     >>> lam = np.linspace(676.73, 676.83, 5) * u.nm
     >>> one = np.ones((1, 1, 5)) * u.Unit("erg / (s cm2 sr cm)")
     >>> cube = StokesCube(one, 0 * one, 0 * one, 0.1 * one, lam, 96 * u.km)
     >>> polarized_spectra(cube)[:, 0, 0, 0].value
     array([1.1, 0.9])
     """
-    from .stokes import RADIANCE_UNIT
+    from gongsynth.sun.stokes import RADIANCE_UNIT
     coeff, kind = _coefficients_for(stokes, mueller)
     arrays = _stokes_arrays(stokes)
     out = np.zeros((N_POLARISATIONS,) + stokes.shape)
@@ -163,7 +163,7 @@ def channel_images(stokes, *, mueller=None, instrument=None):
 
     Parameters
     ----------
-    stokes : `~gongsynth.stokes.StokesCube`
+    stokes : `~gongsynth.sun.stokes.StokesCube`
         Spectral radiance at the Sun (ny, nx, nλ).
     mueller : array_like, optional
         Dimensionless instrument Mueller matrix applied before the I±V
@@ -181,7 +181,7 @@ def channel_images(stokes, *, mueller=None, instrument=None):
     Examples
     --------
     >>> import numpy as np, astropy.units as u
-    >>> from gongsynth.stokes import StokesCube
+    >>> from gongsynth.sun.stokes import StokesCube
     >>> lam = np.linspace(676.73, 676.83, 51) * u.nm
     >>> I = np.full((2, 3, 51), 3e14) * u.Unit("erg / (s cm2 sr cm)")
     >>> cube = StokesCube(I, 0 * I, 0 * I, 0 * I, lam, 96 * u.km)

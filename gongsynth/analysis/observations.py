@@ -283,7 +283,7 @@ def check_disk_footprint(smap, *, name="map", rho=None):
         Name used in the warning (e.g. the file name).
     rho : `numpy.ndarray`, optional
         Distance of every pixel from disk centre in solar radii, if already
-        computed (`gongsynth.statistics.disk_coordinates`).
+        computed (`gongsynth.analysis.statistics.disk_coordinates`).
 
     Returns
     -------
@@ -298,7 +298,7 @@ def check_disk_footprint(smap, *, name="map", rho=None):
     >>> import sunpy.map
     >>> from astropy.coordinates import SkyCoord
     >>> from sunpy.coordinates import frames
-    >>> from gongsynth.statistics import disk_coordinates
+    >>> from gongsynth.analysis.statistics import disk_coordinates
     >>> ref = SkyCoord(0 * u.arcsec, 0 * u.arcsec, frame=frames.Helioprojective,
     ...                observer="earth", obstime="2020-01-01")
     >>> m = sunpy.map.Map(np.ones((100, 100)), sunpy.map.make_fitswcs_header(
@@ -307,7 +307,7 @@ def check_disk_footprint(smap, *, name="map", rho=None):
     >>> check_disk_footprint(sunpy.map.Map(np.where(rho < 1, 1.0, np.nan), m.meta))
     True
     """
-    from .statistics import disk_coordinates
+    from gongsynth.analysis.statistics import disk_coordinates
 
     finite = np.isfinite(np.asarray(smap.data, dtype=float))
     if finite.mean() > 0.95:
@@ -432,7 +432,7 @@ def load_observation(path, *, kind="magnetogram", repair=True):
         values = np.asarray(smap.data) * float(factor) if factor != 1 else smap.data
         smap = smap._new_instance(values, meta, plot_settings=smap.plot_settings)
     if isinstance(smap.coordinate_frame, frames.Helioprojective):
-        from .statistics import disk_coordinates
+        from gongsynth.analysis.statistics import disk_coordinates
 
         rho, _ = disk_coordinates(smap)
         if str(header.get("CTYPE1", "")).upper().startswith("GONG") or _is_gong_observation(header):

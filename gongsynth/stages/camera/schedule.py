@@ -22,9 +22,9 @@ from dataclasses import dataclass
 import astropy.units as u
 import numpy as np
 
-from .instrument import GONGInstrument, resolve_instrument
-from .planes import N_CHANNELS, N_PLANES, N_POLARISATIONS
-from .validation import check_finite, check_quantity
+from gongsynth.instrument import GONGInstrument, resolve_instrument
+from gongsynth.planes import N_CHANNELS, N_PLANES, N_POLARISATIONS
+from gongsynth.validation import check_finite, check_quantity
 
 __all__ = ["FrameSchedule", "frame_schedule", "dither_sequence", "n_frames_in"]
 

@@ -2,7 +2,7 @@ r"""
 The GONG camera: frames accumulated into the six raw planes.
 
 The paper's time integration (Sec. 3.2, second list), for every frame *k* of
-the schedule (`gongsynth.schedule`) and every pixel:
+the schedule (`gongsynth.stages.camera.schedule`) and every pixel:
 
 .. math::
 
@@ -51,13 +51,13 @@ import astropy.units as u
 import numpy as np
 from astropy.io import fits
 
-from .detector import normalise_flat, prepare_dark, synthetic_dark, synthetic_flat
-from .atomic import atomic_path
-from .instrument import resolve_instrument
-from .planes import N_PLANES, PLANE_NAMES
-from .schedule import frame_schedule
-from .seeding import as_seed_sequence, child_sequence, stage_generator
-from .validation import check_quantity
+from gongsynth.stages.camera.detector import normalise_flat, prepare_dark, synthetic_dark, synthetic_flat
+from gongsynth.files import atomic_path
+from gongsynth.instrument import resolve_instrument
+from gongsynth.planes import N_PLANES, PLANE_NAMES
+from gongsynth.stages.camera.schedule import frame_schedule
+from gongsynth.seeding import as_seed_sequence, child_sequence, stage_generator
+from gongsynth.validation import check_quantity
 
 __all__ = ["RawPlanes", "integrate", "ENGINES", "snapshot_index"]
 
@@ -261,11 +261,11 @@ def integrate(expected, *, duration=10 * u.min, engine="blocks", seed=None, inst
         Supplies the schedule, gain, read noise, dither and truncation.
     flat : array_like, str or path-like, optional
         Flat field (ny, nx) or (6, ny, nx), median-normalised per plane
-        inside; a FITS path is read.  Default: `~gongsynth.detector.synthetic_flat`.
+        inside; a FITS path is read.  Default: `~gongsynth.stages.camera.detector.synthetic_flat`.
         Pass ``np.ones((ny, nx))`` for a perfect detector.
     dark : `~astropy.units.Quantity`, str or path-like, optional
         Dark current, electron per frame, scalar or (ny, nx); a FITS path is
-        read.  Default: `~gongsynth.detector.synthetic_dark`.
+        read.  Default: `~gongsynth.stages.camera.detector.synthetic_dark`.
     chunk_rows : int, optional
         Detector rows per chunk (memory bound and progress step); never
         changes the result.
@@ -349,7 +349,7 @@ def _frame_segments(schedule, snap):
 def _run_frames(values, flat, dark, schedule, snap, gain, sigma, root, chunk_rows, workers, progress):
     import numba
 
-    from ._camera_kernels import frames_kernel
+    from gongsynth.stages.camera._kernels import frames_kernel
 
     n_snap, _, ny, nx = values.shape
     seg_start, seg_snap = _frame_segments(schedule, snap)
@@ -410,7 +410,7 @@ def _run_blocks(values, flat, dark, schedule, snap, gain, sigma, root, chunk_row
 
 
 def _header(schedule, engine, root, flat_source, dark_source, n_snap, inst):
-    from . import __version__
+    from gongsynth.version import version as __version__
 
     header = fits.Header()
     entropy = int(root.entropy)

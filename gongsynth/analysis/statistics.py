@@ -25,7 +25,7 @@ import sunpy.map
 from astropy.coordinates import SkyCoord
 from sunpy.coordinates import frames
 
-from .validation import check_quantity
+from gongsynth.validation import check_quantity
 
 __all__ = [
     "MAD_TO_SIGMA",

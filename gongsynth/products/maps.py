@@ -10,9 +10,11 @@ GONGSynthMap with the right units and plot settings for any gongsynth FITS file.
 import astropy.units as u
 import matplotlib.colors as mcolors
 import numpy as np
-from sunpy.map import GenericMap, make_fitswcs_header
+from sunpy.map import GenericMap
 
-from . import __version__
+from gongsynth.geometry import wcs_header
+from gongsynth.instrument import resolve_instrument
+from gongsynth.version import version as __version__
 
 __all__ = ["GONGSynthMap", "PRODUCTS", "product_header", "make_product_map"]
 
@@ -35,7 +37,7 @@ def _product(product):
     return PRODUCTS[product]
 
 
-def product_header(shape, *, centre, scale, product, extra=None):
+def product_header(shape, *, centre, scale, product, instrument=None, extra=None):
     """
     FITS header of a gongsynth product map with a helioprojective WCS.
 
@@ -44,11 +46,13 @@ def product_header(shape, *, centre, scale, product, extra=None):
     shape : tuple of int
         (ny, nx) of the image.
     centre : `~astropy.coordinates.SkyCoord`
-        Helioprojective coordinate of the image centre (see `gongsynth.scene.field_centre`).
+        Helioprojective coordinate of the image centre (see `gongsynth.geometry.field_centre`).
     scale : `~astropy.units.Quantity`
         Pixel size (angle per pixel).
     product : str
         One of `PRODUCTS`.
+    instrument : `~gongsynth.GONGInstrument`, optional
+        Supplies the line wavelength (WAVELNTH).
     extra : dict, optional
         More header cards (≤ 8-character keys), e.g. run parameters; a value
         may be a ``(value, comment)`` pair.
@@ -60,7 +64,7 @@ def product_header(shape, *, centre, scale, product, extra=None):
     Examples
     --------
     >>> import astropy.units as u
-    >>> from gongsynth.scene import field_centre
+    >>> from gongsynth.geometry import field_centre
     >>> centre, _ = field_centre(60 * u.deg)
     >>> h = product_header((8, 8), centre=centre, scale=2.5 * u.arcsec, product="doppler",
     ...                    extra={"seed": ("1", "root random seed")})
@@ -68,19 +72,8 @@ def product_header(shape, *, centre, scale, product, extra=None):
     ('DOPPLERGRAM', 'm s-1', 'SIMULATED', '1')
     """
     content, unit = _product(product)
-    scale = u.Quantity(scale, u.arcsec / u.pix) if scale.unit.is_equivalent(u.arcsec / u.pix) \
-        else scale.to(u.arcsec) / u.pix
-    ny, nx = shape
-    header = make_fitswcs_header(
-        (ny, nx), centre,
-        reference_pixel=u.Quantity([(nx - 1) / 2, (ny - 1) / 2], u.pix),
-        scale=u.Quantity([scale, scale]),
-        telescope="gongsynth (simulated GONG)",
-        instrument="gongsynth",
-        observatory="gongsynth",
-        wavelength=676.78 * u.nm,
-        unit=unit,
-    )
+    inst = resolve_instrument(instrument)
+    header = wcs_header(shape, scale, centre, wavelength=inst.line_wavelength, unit=unit)
     header["origin"] = "gongsynth"
     header["dtype"] = "SIMULATED"
     header["content"] = content
@@ -94,7 +87,7 @@ def product_header(shape, *, centre, scale, product, extra=None):
     return header
 
 
-def make_product_map(data, *, centre, scale, product, extra=None):
+def make_product_map(data, *, centre, scale, product, instrument=None, extra=None):
     """
     A `GONGSynthMap` of one product.
 
@@ -102,7 +95,7 @@ def make_product_map(data, *, centre, scale, product, extra=None):
     ----------
     data : `~astropy.units.Quantity`
         Image (ny, nx) in units convertible to the product's (G, m/s or adu).
-    centre, scale, product, extra
+    centre, scale, product, instrument, extra
         As for `product_header`.
 
     Returns
@@ -113,7 +106,7 @@ def make_product_map(data, *, centre, scale, product, extra=None):
     --------
     >>> import astropy.units as u
     >>> import numpy as np
-    >>> from gongsynth.scene import field_centre
+    >>> from gongsynth.geometry import field_centre
     >>> centre, _ = field_centre(0 * u.deg)
     >>> m = make_product_map(np.ones((4, 4)) * u.kG, centre=centre, scale=2.5 * u.arcsec,
     ...                      product="truth")
@@ -122,7 +115,8 @@ def make_product_map(data, *, centre, scale, product, extra=None):
     """
     unit = _product(product)[1]
     values = u.Quantity(data).to_value(unit)
-    header = product_header(values.shape, centre=centre, scale=scale, product=product, extra=extra)
+    header = product_header(values.shape, centre=centre, scale=scale, product=product,
+                            instrument=instrument, extra=extra)
     return GONGSynthMap(np.asarray(values, dtype=np.float32), header)
 
 
@@ -140,7 +134,7 @@ class GONGSynthMap(GenericMap):
     --------
     >>> import astropy.units as u
     >>> import numpy as np
-    >>> from gongsynth.scene import field_centre
+    >>> from gongsynth.geometry import field_centre
     >>> centre, _ = field_centre(0 * u.deg)
     >>> m = make_product_map(np.zeros((4, 4)) * u.G, centre=centre, scale=2.5 * u.arcsec,
     ...                      product="magnetogram")

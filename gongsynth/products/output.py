@@ -6,7 +6,7 @@ from pathlib import Path
 
 from astropy.io import fits
 
-from .atomic import atomic_path, check_writable
+from gongsynth.files import atomic_path, check_writable
 
 __all__ = ["save_result", "planned_files", "PRODUCT_FILES"]
 

@@ -39,11 +39,11 @@ import scipy.interpolate
 import scipy.sparse
 import scipy.special
 
-from .instrument import resolve_instrument
-from .validation import check_finite, check_quantity
+from gongsynth.stages.scene.scene import BOUNDARIES
+from gongsynth.instrument import resolve_instrument
+from gongsynth.validation import check_finite, check_quantity
 
 __all__ = [
-    "BOUNDARIES",
     "PSF_RADIUS",
     "psf_profile",
     "psf_kernel",
@@ -59,7 +59,6 @@ __all__ = [
 #: Edge handling of `convolve`: the scene repeats ("periodic"), is dark beyond
 #: the field ("zero", full disk) or continues smoothly ("reflect", tiled fields
 #: that are not exactly periodic).
-BOUNDARIES = ("periodic", "zero", "reflect")
 
 #: Default truncation radius of `psf_kernel`; the Airy pattern encloses
 #: 1 - 2/(π² ν_c r) ≈ 99 % of its energy within it.
@@ -584,7 +583,7 @@ def expected_counts(scene, instrument=None, *, psf=None, workers=None):
 
     Parameters
     ----------
-    scene : `~gongsynth.scene.Scene`
+    scene : `~gongsynth.stages.scene.scene.Scene`
         Radiance at Earth per arcsec², ``(6, NY, NX)`` (any leading length works).
     instrument : `~gongsynth.GONGInstrument`, optional
         Defaults to the instrument the scene was built with.

@@ -12,7 +12,7 @@ copies the data behind the user's back: arrays that are already float32 in
 that unit are kept as they are (a view), spatial slicing returns views, and the
 unit conversion of other inputs is done block by block into one float32 array.
 
-File formats live in `gongsynth.stokes_io`; `StokesCube.to_fits`,
+File formats live in `gongsynth.sun.stokes_files`; `StokesCube.to_fits`,
 `StokesCube.from_fits` and `StokesCube.from_rh15d` call them.
 """
 from __future__ import annotations
@@ -23,7 +23,7 @@ import numbers
 import astropy.units as u
 import numpy as np
 
-from .validation import check_quantity
+from gongsynth.validation import check_quantity
 
 __all__ = ["StokesCube", "RADIANCE_UNIT", "STOKES"]
 
@@ -146,7 +146,7 @@ class StokesCube:
         (full-disk scenes).  Default 1 (disk centre).
     blos : `~astropy.units.Quantity`, shape (ny, nx), optional
         True line-of-sight field B·n (G, positive toward the observer), set by
-        `gongsynth.photosphere.synthesize`: the ground truth downstream.
+        `gongsynth.sun.photosphere.synthesize`: the ground truth downstream.
     meta : dict, optional
         Provenance (source file, code, seed, ...).  Copied (shallow).
     copy : bool, optional
@@ -161,7 +161,7 @@ class StokesCube:
     Examples
     --------
     >>> import numpy as np, astropy.units as u
-    >>> from gongsynth.stokes import StokesCube
+    >>> from gongsynth.sun.stokes import StokesCube
     >>> lam = np.linspace(676.73, 676.83, 51) * u.nm
     >>> I = np.full((4, 6, 51), 3e14, dtype=np.float32) * u.Unit("erg / (s cm2 sr cm)")
     >>> zero = np.zeros((4, 6, 51), dtype=np.float32) * I.unit
@@ -423,7 +423,7 @@ class StokesCube:
         """
         Write the cube to a FITS file (exact round trip with `from_fits`).
 
-        See `gongsynth.stokes_io.write_fits` for the layout.
+        See `gongsynth.sun.stokes_files.write_fits` for the layout.
 
         Parameters
         ----------
@@ -431,13 +431,13 @@ class StokesCube:
         overwrite : bool, optional
             Replace an existing file (default: refuse).
         """
-        from .stokes_io import write_fits
+        from gongsynth.sun.stokes_files import write_fits
         write_fits(self, path, overwrite=overwrite)
 
     @classmethod
     def from_fits(cls, path):
         """
-        Read a cube written by `to_fits`; see `gongsynth.stokes_io.read_fits`.
+        Read a cube written by `to_fits`; see `gongsynth.sun.stokes_files.read_fits`.
 
         Parameters
         ----------
@@ -447,7 +447,7 @@ class StokesCube:
         -------
         `StokesCube`
         """
-        from .stokes_io import read_fits
+        from gongsynth.sun.stokes_files import read_fits
         return read_fits(path)
 
     @classmethod
@@ -468,12 +468,12 @@ class StokesCube:
         region : tuple of two slices, optional
             (y, x) columns to read.
 
-        See `gongsynth.stokes_io.read_rh15d` for details.
+        See `gongsynth.sun.stokes_files.read_rh15d` for details.
 
         Returns
         -------
         `StokesCube`
         """
-        from .stokes_io import read_rh15d
+        from gongsynth.sun.stokes_files import read_rh15d
         return read_rh15d(path, pixel_size=pixel_size, mu=mu, wavelength_range=wavelength_range,
                           region=region)

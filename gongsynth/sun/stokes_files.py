@@ -29,9 +29,9 @@ import astropy.units as u
 import numpy as np
 from astropy.io import fits
 
-from .atomic import atomic_path, check_writable
-from .stokes import RADIANCE_UNIT, STOKES, StokesCube
-from .validation import check_quantity
+from gongsynth.files import atomic_path, check_writable
+from gongsynth.sun.stokes import RADIANCE_UNIT, STOKES, StokesCube
+from gongsynth.validation import check_quantity
 
 __all__ = ["write_fits", "read_fits", "read_rh15d", "FITS_CONTENT"]
 
@@ -45,7 +45,7 @@ _RH_UNIT = u.Unit("J / (s m2 Hz sr)")
 
 def _version():
     try:
-        from . import __version__
+        from gongsynth.version import version as __version__
         return __version__
     except ImportError:  # pragma: no cover
         return "unknown"
@@ -53,11 +53,11 @@ def _version():
 
 def write_fits(cube, path, *, overwrite=False):
     """
-    Write a `~gongsynth.stokes.StokesCube` to FITS (layout in the module docstring).
+    Write a `~gongsynth.sun.stokes.StokesCube` to FITS (layout in the module docstring).
 
     Parameters
     ----------
-    cube : `~gongsynth.stokes.StokesCube`
+    cube : `~gongsynth.sun.stokes.StokesCube`
     path : str or `pathlib.Path`
     overwrite : bool, optional
         Replace an existing file; default False raises `FileExistsError`.
@@ -65,7 +65,7 @@ def write_fits(cube, path, *, overwrite=False):
     Examples
     --------
     >>> import numpy as np, astropy.units as u, tempfile, os
-    >>> from gongsynth.stokes import StokesCube
+    >>> from gongsynth.sun.stokes import StokesCube
     >>> data = np.ones((4, 2, 2, 3), dtype=np.float32)
     >>> cube = StokesCube.from_array(data, [676.7, 676.78, 676.9] * u.nm, 96 * u.km)
     >>> path = os.path.join(tempfile.mkdtemp(), "cube.fits")
@@ -79,7 +79,7 @@ def write_fits(cube, path, *, overwrite=False):
     check_writable([path], overwrite)
     primary = fits.PrimaryHDU()
     hdr = primary.header
-    hdr["CONTENT"] = (FITS_CONTENT, "file layout: gongsynth.stokes_io")
+    hdr["CONTENT"] = (FITS_CONTENT, "file layout: gongsynth.sun.stokes_files")
     hdr["ORIGIN"] = ("gongsynth", "synthetic data, not an observation")
     hdr["GSVERS"] = (_version(), "gongsynth version")
     hdr["PIXSIZE"] = (float(cube.pixel_size.to_value(u.km)), "[km] horizontal size of one column")
@@ -117,7 +117,7 @@ def read_fits(path):
 
     Returns
     -------
-    `~gongsynth.stokes.StokesCube`
+    `~gongsynth.sun.stokes.StokesCube`
 
     Raises
     ------
@@ -231,7 +231,7 @@ def read_rh15d(path, *, pixel_size=None, mu=1.0, wavelength_range=None, region=N
 
     Returns
     -------
-    `~gongsynth.stokes.StokesCube`
+    `~gongsynth.sun.stokes.StokesCube`
         With ``meta`` holding the file name and the file's global attributes.
 
     Raises

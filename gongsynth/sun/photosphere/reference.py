@@ -16,9 +16,9 @@ import warnings
 import astropy.units as u
 import numpy as np
 
-from ..instrument import GONGInstrument
-from ..stokes import StokesCube
-from ..validation import check_quantity, check_wavelength_grid
+from gongsynth.instrument import GONGInstrument
+from gongsynth.sun.stokes import StokesCube
+from gongsynth.validation import check_quantity, check_wavelength_grid
 
 __all__ = ["falc_stokes"]
 
@@ -72,7 +72,7 @@ def falc_stokes(field, *, inclination=0 * u.deg, wavelength=None, instrument=Non
 
     Returns
     -------
-    `~gongsynth.stokes.StokesCube`
+    `~gongsynth.sun.stokes.StokesCube`
         Shape (1, n, nλ), μ = 1, ``blos`` = B cos(inclination).  Q and U are
         set to zero (only I and V are compared with the ME synthesis).
 
@@ -96,7 +96,7 @@ def falc_stokes(field, *, inclination=0 * u.deg, wavelength=None, instrument=Non
     if fields.ndim != 1 or np.any(fields < 0) or not np.isfinite(fields).all():
         raise ValueError(f"field must be non-negative finite strengths (scalar or 1-D), got {field}")
     if wavelength is None:
-        from .synthesis import default_wavelength
+        from gongsynth.sun.photosphere.synthesis import default_wavelength
         wavelength = default_wavelength()
     check_wavelength_grid(wavelength, instrument.line_wavelength)
     gamma = float(inclination.to_value(u.rad))
@@ -146,7 +146,7 @@ def falc_stokes(field, *, inclination=0 * u.deg, wavelength=None, instrument=Non
     V = np.array(stokes_v, dtype=np.float32)[None] * _RH_UNIT
     zero = np.zeros_like(I)
     blos = (fields * np.cos(gamma))[None].astype(np.float32) * u.G
-    meta = {"origin": "gongsynth.photosphere.reference.falc_stokes",
+    meta = {"origin": "gongsynth.sun.photosphere.reference.falc_stokes",
             "code": f"lightweaver {getattr(lw, '__version__', '?')}", "atmosphere": "FAL-C",
             "lte": True, "inclination_deg": float(np.degrees(gamma))}
     return StokesCube(I, zero, zero, V, wavelength, 96 * u.km, blos=blos, meta=meta)

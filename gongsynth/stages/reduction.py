@@ -27,11 +27,11 @@ from dataclasses import dataclass
 import astropy.units as u
 import numpy as np
 
-from .detector import normalise_flat
-from .filters import measured_phase, reference_phase
-from .instrument import resolve_instrument
-from .planes import N_CHANNELS, N_PLANES
-from .validation import check_finite, check_quantity
+from gongsynth.stages.camera.detector import normalise_flat
+from gongsynth.stages.filters import measured_phase, reference_phase
+from gongsynth.instrument import resolve_instrument
+from gongsynth.planes import N_CHANNELS, N_PLANES
+from gongsynth.validation import check_finite, check_quantity
 
 __all__ = ["Observables", "reduce", "subtract_dark", "divide_flat", "phase_to_velocity"]
 
@@ -127,7 +127,7 @@ def _frames(frames_per_plane, ndim):
 
 def divide_flat(planes, flat):
     """
-    Divide planes by a median-normalised flat (`gongsynth.detector.normalise_flat`).
+    Divide planes by a median-normalised flat (`gongsynth.stages.camera.detector.normalise_flat`).
 
     Parameters
     ----------
@@ -171,7 +171,7 @@ def phase_to_velocity(phase, instrument=None):
 
     Examples
     --------
-    >>> from gongsynth.filters import reference_phase
+    >>> from gongsynth.stages.filters import reference_phase
     >>> phase_to_velocity(reference_phase() - 0.1 * u.rad).round(2)  # 0.1 rad * v0
     <Quantity 215.19 m / s>
     """
@@ -188,7 +188,7 @@ def reduce(raw, instrument=None, dark=None, flat=None, *, frames_per_plane=None,
 
     Parameters
     ----------
-    raw : `~gongsynth.camera.RawPlanes` or array_like
+    raw : `~gongsynth.stages.camera.integrate.RawPlanes` or array_like
         The planes, shape (6, ...) in DN, ordered as in `gongsynth.planes`.
         Any spatial shape works (including none: a single pixel).
     instrument : `~gongsynth.GONGInstrument`, optional
@@ -216,7 +216,7 @@ def reduce(raw, instrument=None, dark=None, flat=None, *, frames_per_plane=None,
 
     >>> import numpy as np
     >>> import astropy.units as u
-    >>> from gongsynth.filters import channel_weights
+    >>> from gongsynth.stages.filters import channel_weights
     >>> lam = np.linspace(676.6, 676.96, 721) * u.nm
     >>> line = 1 - 0.6 * np.exp(-0.5 * ((lam - 676.78 * u.nm) / (4.2466 * u.pm)) ** 2)
     >>> channels = channel_weights(lam).value @ line.value

@@ -23,9 +23,9 @@ import astropy.units as u
 import numpy as np
 from astropy.io import fits
 
-from .planes import N_PLANES
-from .seeding import stage_generator
-from .validation import check_finite, check_quantity
+from gongsynth.planes import N_PLANES
+from gongsynth.seeding import stage_generator
+from gongsynth.validation import check_finite, check_quantity
 
 __all__ = ["synthetic_flat", "synthetic_dark", "read_flat", "read_dark", "normalise_flat",
            "prepare_dark", "DEFAULT_MAP_SEED"]

@@ -1,0 +1,4 @@
+"""
+Analysis: real observations, map statistics, degrading to GONG, comparison and calibration.
+"""
+__all__ = []
