@@ -105,7 +105,7 @@ ax.legend(ncol=3, fontsize="small", loc="upper center", bbox_to_anchor=(0.5, -0.
 # planes: each polarisation's phase
 # :math:`\phi^\pm = \operatorname{atan2}(\sqrt3 (I_1 - I_2),\ 2I_0 - I_1 - I_2)` is
 # measured relative to the phase of a line at rest
-# (`~gongsynth.filters.reference_phase`) and wrapped into :math:`(-\pi, \pi]`;
+# (`~gongsynth.reduction.reference_phase`) and wrapped into :math:`(-\pi, \pi]`;
 # a redshift lowers the phase, so :math:`v^\pm = v_0 (\phi_\mathrm{ref} - \phi^\pm)`.
 # The field is :math:`B = 0.7038\ \mathrm{G\,(m/s)^{-1}} \times (v^+ - v^-)/2` and the
 # line-of-sight velocity :math:`(v^+ + v^-)/2`.

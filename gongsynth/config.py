@@ -16,7 +16,7 @@ from astropy.time import Time
 
 from gongsynth.instrument import GONGInstrument
 from gongsynth.geometry import DEFAULT_OBSTIME as _DEFAULT_TIME
-from gongsynth.seeding import as_seed_sequence
+from gongsynth.seeding import root_seed
 from gongsynth.tomlfmt import toml_value
 
 __all__ = ["SimulationConfig", "ENGINES", "MODES", "DEFAULT_OBSTIME"]
@@ -152,9 +152,7 @@ class SimulationConfig:
         -------
         `SimulationConfig`
         """
-        if seed is None or not isinstance(seed, int):
-            seed = int(as_seed_sequence(seed).generate_state(2, dtype="uint32").astype(object)
-                       .dot([1, 2**32])) & (2**63 - 1)
+        seed = root_seed(seed)
         instrument = GONGInstrument() if instrument is None else instrument
         if isinstance(kwargs.get("obstime"), Time):
             kwargs["obstime"] = kwargs["obstime"].isot

@@ -11,7 +11,7 @@ import hashlib
 
 import numpy as np
 
-__all__ = ["as_seed_sequence", "child_sequence", "stage_generator", "seed_entropy"]
+__all__ = ["as_seed_sequence", "child_sequence", "stage_generator", "root_seed"]
 
 
 def as_seed_sequence(seed):
@@ -110,9 +110,13 @@ def stage_generator(seed, name, *index):
     return np.random.Generator(np.random.PCG64(child_sequence(seed, name, *index)))
 
 
-def seed_entropy(seed):
+def root_seed(seed):
     """
-    The root entropy of a seed, as an int suitable for a FITS header or a config file.
+    The run's root seed as a non-negative int, drawing fresh entropy for None.
+
+    An int is kept as it is; anything else (None, a `numpy.random.SeedSequence`
+    or `numpy.random.Generator`) is reduced to 63 bits of its state, so it fits
+    a FITS header and a config file and the run can be repeated from them.
 
     Parameters
     ----------
@@ -125,7 +129,12 @@ def seed_entropy(seed):
 
     Examples
     --------
-    >>> seed_entropy(12)
+    >>> root_seed(12)
     12
+    >>> 0 <= root_seed(None) < 2**63
+    True
     """
-    return int(as_seed_sequence(seed).entropy)
+    if isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
+        return int(as_seed_sequence(seed).entropy)
+    state = as_seed_sequence(seed).generate_state(2, dtype="uint32").astype(object)
+    return int(state.dot([1, 2**32])) & (2**63 - 1)

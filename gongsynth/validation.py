@@ -4,7 +4,7 @@ Input checks shared by every stage, with error messages that name the argument.
 import astropy.units as u
 import numpy as np
 
-__all__ = ["check_quantity", "check_wavelength_grid", "check_finite", "check_shape"]
+__all__ = ["check_quantity", "check_wavelength_grid", "check_finite"]
 
 
 def check_quantity(value, unit, name, *, equivalencies=None):
@@ -82,33 +82,6 @@ def check_finite(array, name):
     bad = ~np.isfinite(values)
     if np.any(bad):
         raise ValueError(f"{name} contains {int(bad.sum())} non-finite value(s) (NaN or inf)")
-    return array
-
-
-def check_shape(array, shape, name):
-    """
-    Raise ValueError naming ``name`` if ``array.shape`` differs from ``shape``.
-
-    Parameters
-    ----------
-    array : array_like
-    shape : tuple of int
-    name : str
-
-    Returns
-    -------
-    object
-        ``array`` itself.
-
-    Examples
-    --------
-    >>> check_shape([[1, 2]], (2, 1), "dark")
-    Traceback (most recent call last):
-    ...
-    ValueError: dark must have shape (2, 1), got (1, 2)
-    """
-    if tuple(np.shape(array)) != tuple(shape):
-        raise ValueError(f"{name} must have shape {tuple(shape)}, got {tuple(np.shape(array))}")
     return array
 
 

@@ -7,7 +7,6 @@ import pytest
 from astropy.io import fits
 
 from gongsynth.sun.stokes import RADIANCE_UNIT, StokesCube
-from gongsynth.sun.stokes_files import read_fits, read_rh15d, write_fits
 
 LAM = np.linspace(676.73, 676.83, 51) * u.nm
 RH_UNIT = u.Unit("J / (s m2 Hz sr)")
@@ -216,8 +215,8 @@ def test_fits_round_trip_is_exact(tmp_path):
 
 def test_fits_scalar_mu_without_blos(tmp_path):
     cube = _cube(mu=0.5)
-    write_fits(cube, tmp_path / "c.fits")
-    back = read_fits(tmp_path / "c.fits")
+    cube.to_fits(tmp_path / "c.fits")
+    back = StokesCube.from_fits(tmp_path / "c.fits")
     assert back.mu == 0.5 and back.blos is None
 
 
@@ -228,7 +227,7 @@ def test_fits_refuses_to_overwrite(tmp_path):
     with pytest.raises(FileExistsError, match="overwrite"):
         cube.to_fits(path)
     cube[:2].to_fits(path, overwrite=True)
-    assert read_fits(path).shape == (2, 8, 51)
+    assert StokesCube.from_fits(path).shape == (2, 8, 51)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cube.fits"]   # no temp files left
 
 
@@ -236,20 +235,20 @@ def test_malformed_fits_files_raise_clear_errors(tmp_path):
     junk = tmp_path / "junk.fits"
     junk.write_bytes(b"this is not a FITS file" * 200)
     with pytest.raises(ValueError, match="not a readable FITS file"):
-        read_fits(junk)
+        StokesCube.from_fits(junk)
     other = tmp_path / "other.fits"
     fits.PrimaryHDU(np.zeros((3, 3))).writeto(other)
     with pytest.raises(ValueError, match="not a gongsynth Stokes cube"):
-        read_fits(other)
+        StokesCube.from_fits(other)
     good = tmp_path / "good.fits"
     _cube().to_fits(good)
     with fits.open(good) as hdul:
         del hdul["U"]
         hdul.writeto(tmp_path / "missing.fits")
     with pytest.raises(ValueError, match=r"missing extension\(s\) \['U'\]"):
-        read_fits(tmp_path / "missing.fits")
+        StokesCube.from_fits(tmp_path / "missing.fits")
     with pytest.raises(FileNotFoundError):
-        read_fits(tmp_path / "nope.fits")
+        StokesCube.from_fits(tmp_path / "nope.fits")
 
 
 # ------------------------------------------------------------------------ RH 1.5D
@@ -292,36 +291,36 @@ def test_rh15d_reader_transposes_converts_and_selects_wavelengths(tmp_path):
 def test_rh15d_region_and_explicit_pixel_size(tmp_path):
     path = tmp_path / "output_ray.hdf5"
     lam, inten = _write_rh(path, nx=9, ny=7)
-    full = read_rh15d(path, pixel_size=96 * u.km)
-    part = read_rh15d(path, pixel_size=96 * u.km, region=(slice(2, 6), slice(1, 9, 2)))
+    full = StokesCube.from_rh15d(path, pixel_size=96 * u.km)
+    part = StokesCube.from_rh15d(path, pixel_size=96 * u.km, region=(slice(2, 6), slice(1, 9, 2)))
     np.testing.assert_array_equal(part.I.value, full.I.value[2:6, 1:9:2])
     with pytest.raises(ValueError, match="pixel_size not given"):
-        read_rh15d(path)
+        StokesCube.from_rh15d(path)
 
 
 def test_rh15d_bad_files_raise_clear_errors(tmp_path):
     junk = tmp_path / "junk.hdf5"
     junk.write_bytes(b"\x00garbage" * 100)
     with pytest.raises(ValueError, match="not a readable HDF5 file"):
-        read_rh15d(junk, pixel_size=96 * u.km)
+        StokesCube.from_rh15d(junk, pixel_size=96 * u.km)
     nostokes = tmp_path / "nostokes.hdf5"
     _write_rh(nostokes, stokes=False)
     with pytest.raises(ValueError, match=r"missing variable\(s\).*stokes_V.*NO_STOKES"):
-        read_rh15d(nostokes, pixel_size=96 * u.km)
+        StokesCube.from_rh15d(nostokes, pixel_size=96 * u.km)
     filled = tmp_path / "filled.hdf5"
     _write_rh(filled)
     with h5py.File(filled, "r+") as f:
         f["stokes_V"][2, 1, :] = 9.9692e36
     with pytest.raises(ValueError, match=r"fill value in 1 column"):
-        read_rh15d(filled, pixel_size=96 * u.km)
+        StokesCube.from_rh15d(filled, pixel_size=96 * u.km)
     badshape = tmp_path / "badshape.hdf5"
     _write_rh(badshape)
     with h5py.File(badshape, "r+") as f:
         del f["stokes_Q"]
         f["stokes_Q"] = np.zeros((5, 4, 3), dtype=np.float32)
     with pytest.raises(ValueError, match="stokes_Q has shape"):
-        read_rh15d(badshape, pixel_size=96 * u.km)
+        StokesCube.from_rh15d(badshape, pixel_size=96 * u.km)
     with pytest.raises(ValueError, match="holds 0 of the file's wavelengths"):
-        read_rh15d(filled, pixel_size=96 * u.km, wavelength_range=[500, 501] * u.nm)
+        StokesCube.from_rh15d(filled, pixel_size=96 * u.km, wavelength_range=[500, 501] * u.nm)
     with pytest.raises(FileNotFoundError):
-        read_rh15d(tmp_path / "none.hdf5", pixel_size=96 * u.km)
+        StokesCube.from_rh15d(tmp_path / "none.hdf5", pixel_size=96 * u.km)

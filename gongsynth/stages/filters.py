@@ -41,8 +41,7 @@ __all__ = [
     "channel_responses",
     "channel_weights",
     "modulation_amplitude",
-    "measured_phase",
-    "reference_phase",
+    "filter_quadrature",
 ]
 
 
@@ -258,8 +257,23 @@ def channel_responses(wavelength: u.nm, instrument=None):
 
 
 @functools.lru_cache(maxsize=32)
-def _quadrature(inst):
-    """Fine quadrature grid (nm), trapezoid weights (nm) and responses for ``inst``."""
+def filter_quadrature(inst):
+    """
+    The fine quadrature of the filter chain (cached per instrument).
+
+    Parameters
+    ----------
+    inst : `~gongsynth.GONGInstrument`
+
+    Returns
+    -------
+    grid : `numpy.ndarray`
+        Wavelengths in nm: λ0 ± ``integration_half_width`` every ``quadrature_step``.
+    dlam : `numpy.ndarray`
+        Trapezoid weights in nm.
+    responses : `numpy.ndarray`
+        (3, n) sector responses R̄_i on the grid.
+    """
     lam0 = inst.line_wavelength.to_value(u.nm)
     half = inst.integration_half_width.to_value(u.nm)
     step = inst.quadrature_step.to_value(u.nm)
@@ -304,7 +318,7 @@ def channel_weights(wavelength: u.nm, instrument=None):
     """
     inst = resolve_instrument(instrument)
     lam = check_wavelength_grid(wavelength, inst.line_wavelength, "wavelength").to_value(u.nm)
-    grid, dlam, resp = _quadrature(inst)
+    grid, dlam, resp = filter_quadrature(inst)
     # Hat-function interpolation weights of every fine point onto the input grid.
     k = np.clip(np.searchsorted(lam, grid, side="right") - 1, 0, lam.size - 2)
     t = np.clip((grid - lam[k]) / (lam[k + 1] - lam[k]), 0.0, 1.0)
@@ -314,74 +328,3 @@ def channel_weights(wavelength: u.nm, instrument=None):
         weights[i] = (np.bincount(k, rw * (1 - t), minlength=lam.size)
                       + np.bincount(k + 1, rw * t, minlength=lam.size))
     return u.Quantity(weights, u.nm)
-
-
-def measured_phase(channels):
-    r"""
-    GONG phase of three channel intensities (the √3 arctan, paper Eq. 5).
-
-    :math:`\phi = \mathrm{atan2}\big(\sqrt3(I_1 - I_2),\ 2I_0 - I_1 - I_2\big)`,
-    i.e. the paper's arctan with the quadrant resolved, so φ covers (-π, π].
-
-    Parameters
-    ----------
-    channels : array_like
-        Shape (3, ...): I_0, I_1, I_2.  Any units (they cancel).
-
-    Returns
-    -------
-    `numpy.ndarray`
-        Phase in radians, shape (...).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> x = 0.4
-    >>> channels = [1 + np.cos(x - 2 * np.pi * i / 3) for i in range(3)]
-    >>> round(float(measured_phase(channels)), 6)
-    0.4
-    """
-    i0, i1, i2 = (np.asarray(getattr(c, "value", c), dtype=float) for c in channels)
-    return np.arctan2(math.sqrt(3) * (i1 - i2), 2 * i0 - i1 - i2)
-
-
-def _reference_spectrum(lam_nm, inst):
-    """Continuum-normalised Gaussian rest line used to fix the phase zero point."""
-    sigma = inst.reference_line_fwhm.to_value(u.nm) / (2 * math.sqrt(2 * math.log(2)))
-    depth = inst.reference_line_depth.to_value(u.one)
-    lam0 = inst.line_wavelength.to_value(u.nm)
-    return 1 - depth * np.exp(-0.5 * ((lam_nm - lam0) / sigma) ** 2)
-
-
-@functools.lru_cache(maxsize=32)
-def _reference_phase(inst):
-    grid, dlam, resp = _quadrature(inst)
-    spectrum = _reference_spectrum(grid, inst)
-    return float(measured_phase(resp @ (spectrum * dlam)))
-
-
-def reference_phase(instrument=None):
-    """
-    Phase that a line at rest produces: the zero point of GONG velocities.
-
-    The Michelson's λ0/Δλ_m ≈ 22190 waves make θ_m useless as an absolute
-    zero point (design §3.4), so velocities are measured relative to the phase
-    of a Gaussian rest line (``reference_line_fwhm``, ``reference_line_depth``)
-    pushed through the instrument's own filter chain.
-
-    Parameters
-    ----------
-    instrument : `~gongsynth.GONGInstrument`, optional
-
-    Returns
-    -------
-    `~astropy.units.Quantity`
-        In radians, within (-π, π].
-
-    Examples
-    --------
-    >>> phi = reference_phase()
-    >>> phi.unit, bool(-3.15 < phi.value < 3.15)
-    (Unit("rad"), True)
-    """
-    return _reference_phase(resolve_instrument(instrument)) * u.rad

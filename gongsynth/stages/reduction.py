@@ -21,6 +21,7 @@ the pixels *at risk*: those where either polarisation's phase lies within
 rest that flags 4.3 kG < |B| < 5.2 kG; fields stronger still wrap to values
 that look ordinary.
 """
+import functools
 import math
 from dataclasses import dataclass
 
@@ -28,12 +29,13 @@ import astropy.units as u
 import numpy as np
 
 from gongsynth.stages.camera.detector import normalise_flat
-from gongsynth.stages.filters import measured_phase, reference_phase
+from gongsynth.stages.filters import filter_quadrature
 from gongsynth.instrument import resolve_instrument
 from gongsynth.planes import N_CHANNELS, N_PLANES
 from gongsynth.validation import check_finite, check_quantity
 
-__all__ = ["Observables", "reduce", "subtract_dark", "divide_flat", "phase_to_velocity"]
+__all__ = ["Observables", "reduce", "subtract_dark", "divide_flat", "measured_phase", "phase_to_velocity",
+           "reference_phase"]
 
 
 @dataclass(frozen=True)
@@ -171,7 +173,6 @@ def phase_to_velocity(phase, instrument=None):
 
     Examples
     --------
-    >>> from gongsynth.stages.filters import reference_phase
     >>> phase_to_velocity(reference_phase() - 0.1 * u.rad).round(2)  # 0.1 rad * v0
     <Quantity 215.19 m / s>
     """
@@ -258,3 +259,74 @@ def reduce(raw, instrument=None, dark=None, flat=None, *, frames_per_plane=None,
         phase=u.Quantity(phases, u.rad),
         wrapped=wrapped,
     )
+
+
+def measured_phase(channels):
+    r"""
+    GONG phase of three channel intensities (the √3 arctan, paper Eq. 5).
+
+    :math:`\phi = \mathrm{atan2}\big(\sqrt3(I_1 - I_2),\ 2I_0 - I_1 - I_2\big)`,
+    i.e. the paper's arctan with the quadrant resolved, so φ covers (-π, π].
+
+    Parameters
+    ----------
+    channels : array_like
+        Shape (3, ...): I_0, I_1, I_2.  Any units (they cancel).
+
+    Returns
+    -------
+    `numpy.ndarray`
+        Phase in radians, shape (...).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> x = 0.4
+    >>> channels = [1 + np.cos(x - 2 * np.pi * i / 3) for i in range(3)]
+    >>> round(float(measured_phase(channels)), 6)
+    0.4
+    """
+    i0, i1, i2 = (np.asarray(getattr(c, "value", c), dtype=float) for c in channels)
+    return np.arctan2(math.sqrt(3) * (i1 - i2), 2 * i0 - i1 - i2)
+
+
+def _reference_spectrum(lam_nm, inst):
+    """Continuum-normalised Gaussian rest line used to fix the phase zero point."""
+    sigma = inst.reference_line_fwhm.to_value(u.nm) / (2 * math.sqrt(2 * math.log(2)))
+    depth = inst.reference_line_depth.to_value(u.one)
+    lam0 = inst.line_wavelength.to_value(u.nm)
+    return 1 - depth * np.exp(-0.5 * ((lam_nm - lam0) / sigma) ** 2)
+
+
+@functools.lru_cache(maxsize=32)
+def _reference_phase(inst):
+    grid, dlam, resp = filter_quadrature(inst)
+    spectrum = _reference_spectrum(grid, inst)
+    return float(measured_phase(resp @ (spectrum * dlam)))
+
+
+def reference_phase(instrument=None):
+    """
+    Phase that a line at rest produces: the zero point of GONG velocities.
+
+    The Michelson's λ0/Δλ_m ≈ 22190 waves make θ_m useless as an absolute
+    zero point (design §3.4), so velocities are measured relative to the phase
+    of a Gaussian rest line (``reference_line_fwhm``, ``reference_line_depth``)
+    pushed through the instrument's own filter chain.
+
+    Parameters
+    ----------
+    instrument : `~gongsynth.GONGInstrument`, optional
+
+    Returns
+    -------
+    `~astropy.units.Quantity`
+        In radians, within (-π, π].
+
+    Examples
+    --------
+    >>> phi = reference_phase()
+    >>> phi.unit, bool(-3.15 < phi.value < 3.15)
+    (Unit("rad"), True)
+    """
+    return _reference_phase(resolve_instrument(instrument)) * u.rad

@@ -23,15 +23,10 @@ import numbers
 import astropy.units as u
 import numpy as np
 
+from gongsynth.sun.stokes_files import RADIANCE_UNIT, STOKES, read_fits, read_rh15d, write_fits
 from gongsynth.validation import check_quantity
 
 __all__ = ["StokesCube", "RADIANCE_UNIT", "STOKES"]
-
-#: Storage unit of every Stokes array: spectral radiance per unit wavelength.
-RADIANCE_UNIT = u.Unit("erg / (s cm2 sr cm)")
-
-#: Names of the four Stokes parameters, in storage order.
-STOKES = ("I", "Q", "U", "V")
 
 # Rows converted / checked at once: bounds temporaries to ~a few tens of MB.
 _BLOCK_ELEMENTS = 4_000_000
@@ -431,7 +426,6 @@ class StokesCube:
         overwrite : bool, optional
             Replace an existing file (default: refuse).
         """
-        from gongsynth.sun.stokes_files import write_fits
         write_fits(self, path, overwrite=overwrite)
 
     @classmethod
@@ -447,8 +441,7 @@ class StokesCube:
         -------
         `StokesCube`
         """
-        from gongsynth.sun.stokes_files import read_fits
-        return read_fits(path)
+        return cls(**read_fits(path))
 
     @classmethod
     def from_rh15d(cls, path, *, pixel_size=None, mu=1.0, wavelength_range=None, region=None):
@@ -474,6 +467,5 @@ class StokesCube:
         -------
         `StokesCube`
         """
-        from gongsynth.sun.stokes_files import read_rh15d
-        return read_rh15d(path, pixel_size=pixel_size, mu=mu, wavelength_range=wavelength_range,
-                          region=region)
+        return cls(**read_rh15d(path, pixel_size=pixel_size, mu=mu,
+                                wavelength_range=wavelength_range, region=region))

@@ -30,10 +30,16 @@ import numpy as np
 from astropy.io import fits
 
 from gongsynth.files import atomic_path, check_writable
-from gongsynth.sun.stokes import RADIANCE_UNIT, STOKES, StokesCube
 from gongsynth.validation import check_quantity
+from gongsynth.version import version
 
-__all__ = ["write_fits", "read_fits", "read_rh15d", "FITS_CONTENT"]
+__all__ = ["write_fits", "read_fits", "read_rh15d", "FITS_CONTENT", "RADIANCE_UNIT", "STOKES"]
+
+#: Storage unit of every Stokes array: spectral radiance per unit wavelength.
+RADIANCE_UNIT = u.Unit("erg / (s cm2 sr cm)")
+
+#: Names of the four Stokes parameters, in storage order.
+STOKES = ("I", "Q", "U", "V")
 
 #: Value of the CONTENT keyword that marks a gongsynth Stokes cube.
 FITS_CONTENT = "GONGSYNTH STOKES CUBE"
@@ -41,14 +47,6 @@ FITS_CONTENT = "GONGSYNTH STOKES CUBE"
 # RH 1.5D marks columns that did not converge with this fill value.
 _RH_FILL_THRESHOLD = 1e30
 _RH_UNIT = u.Unit("J / (s m2 Hz sr)")
-
-
-def _version():
-    try:
-        from gongsynth.version import version as __version__
-        return __version__
-    except ImportError:  # pragma: no cover
-        return "unknown"
 
 
 def write_fits(cube, path, *, overwrite=False):
@@ -70,10 +68,10 @@ def write_fits(cube, path, *, overwrite=False):
     >>> cube = StokesCube.from_array(data, [676.7, 676.78, 676.9] * u.nm, 96 * u.km)
     >>> path = os.path.join(tempfile.mkdtemp(), "cube.fits")
     >>> write_fits(cube, path)
-    >>> bool(np.all(read_fits(path).V == cube.V))
+    >>> bool(np.all(read_fits(path)["V"] == cube.V))
     True
     """
-    if not isinstance(cube, StokesCube):
+    if not all(hasattr(cube, name) for name in (*STOKES, "wavelength", "pixel_size", "mu")):
         raise TypeError(f"cube must be a StokesCube, got {type(cube).__name__}")
     path = Path(path)
     check_writable([path], overwrite)
@@ -81,7 +79,7 @@ def write_fits(cube, path, *, overwrite=False):
     hdr = primary.header
     hdr["CONTENT"] = (FITS_CONTENT, "file layout: gongsynth.sun.stokes_files")
     hdr["ORIGIN"] = ("gongsynth", "synthetic data, not an observation")
-    hdr["GSVERS"] = (_version(), "gongsynth version")
+    hdr["GSVERS"] = (version, "gongsynth version")
     hdr["PIXSIZE"] = (float(cube.pixel_size.to_value(u.km)), "[km] horizontal size of one column")
     if np.ndim(cube.mu) == 0:
         hdr["MU"] = (float(cube.mu), "cos of the viewing angle")
@@ -117,7 +115,9 @@ def read_fits(path):
 
     Returns
     -------
-    `~gongsynth.sun.stokes.StokesCube`
+    dict
+        The `~gongsynth.sun.stokes.StokesCube` constructor's arguments
+        (``StokesCube.from_fits`` builds the cube from them).
 
     Raises
     ------
@@ -182,8 +182,8 @@ def read_fits(path):
         if "BLOS" in names:
             blos = u.Quantity(np.array(hdul["BLOS"].data, dtype=np.float32),
                               hdul["BLOS"].header.get("BUNIT", "G"))
-        return StokesCube(*stokes, wavelength, float(hdr["PIXSIZE"]) * u.km, mu=mu, blos=blos,
-                          meta=meta)
+        return dict(zip(STOKES, stokes), wavelength=wavelength,
+                    pixel_size=float(hdr["PIXSIZE"]) * u.km, mu=mu, blos=blos, meta=meta)
 
 
 def _rh_pixel_size(path):
@@ -231,8 +231,10 @@ def read_rh15d(path, *, pixel_size=None, mu=1.0, wavelength_range=None, region=N
 
     Returns
     -------
-    `~gongsynth.sun.stokes.StokesCube`
-        With ``meta`` holding the file name and the file's global attributes.
+    dict
+        The `~gongsynth.sun.stokes.StokesCube` constructor's arguments, with
+        ``meta`` holding the file name and the file's global attributes
+        (``StokesCube.from_rh15d`` builds the cube from them).
 
     Raises
     ------
@@ -251,8 +253,8 @@ def read_rh15d(path, *, pixel_size=None, mu=1.0, wavelength_range=None, region=N
     ...     f["wavelength"] = np.linspace(676.70, 676.86, 17)
     ...     for name in ("intensity", "stokes_Q", "stokes_U", "stokes_V"):
     ...         f[name] = np.full((3, 2, 17), 4.6e-8 if name == "intensity" else 0, "f4")
-    >>> cube = read_rh15d(path, pixel_size=48 * u.km, wavelength_range=[676.73, 676.83] * u.nm)
-    >>> cube.shape                                          # (y, x, wavelength)
+    >>> fields = read_rh15d(path, pixel_size=48 * u.km, wavelength_range=[676.73, 676.83] * u.nm)
+    >>> fields["I"].shape                                   # (y, x, wavelength)
     (2, 3, 11)
     """
     import h5py
@@ -343,4 +345,4 @@ def read_rh15d(path, *, pixel_size=None, mu=1.0, wavelength_range=None, region=N
             v = v.decode() if isinstance(v, bytes) else v
             meta[f"rh_{k}"] = v.item() if isinstance(v, np.generic) else (
                 v.tolist() if isinstance(v, np.ndarray) else v)
-    return StokesCube(out["I"], out["Q"], out["U"], out["V"], wavelength, pixel_size, mu=mu, meta=meta)
+    return dict(out, wavelength=wavelength, pixel_size=pixel_size, mu=mu, meta=meta)
