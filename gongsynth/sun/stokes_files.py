@@ -30,6 +30,7 @@ import numpy as np
 from astropy.io import fits
 
 from gongsynth.files import atomic_path, check_writable
+from gongsynth.optional import import_optional
 from gongsynth.validation import check_quantity
 from gongsynth.version import version
 
@@ -188,7 +189,7 @@ def read_fits(path):
 
 def _rh_pixel_size(path):
     """Column spacing from the ``atmos/x`` array of a sibling output_indata.hdf5, or None."""
-    import h5py
+    h5py = import_optional("h5py", "h5py")
 
     indata = Path(path).with_name("output_indata.hdf5")
     if not indata.exists():
@@ -257,7 +258,7 @@ def read_rh15d(path, *, pixel_size=None, mu=1.0, wavelength_range=None, region=N
     >>> fields["I"].shape                                   # (y, x, wavelength)
     (2, 3, 11)
     """
-    import h5py
+    h5py = import_optional("h5py", "h5py")
 
     path = Path(path)
     if not path.exists():
