@@ -28,10 +28,10 @@ import astropy.units as u
 import numpy as np
 
 from gongsynth import GONGInstrument
-from gongsynth.stages.camera.integrate import integrate
 from gongsynth.stages.camera.detector import synthetic_dark, synthetic_flat
-from gongsynth.stages.filters import channel_weights
+from gongsynth.stages.camera.integrate import integrate
 from gongsynth.stages.camera.schedule import frame_schedule
+from gongsynth.stages.filters import channel_weights
 
 
 def disk_scene(n=860, continuum=1.2e5, radius=0.45):

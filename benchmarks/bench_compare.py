@@ -25,8 +25,8 @@ from sunpy.coordinates import frames
 
 from gongsynth import GONGInstrument
 from gongsynth.analysis.compare import _overlap_operator, degrade_to_gong
-from gongsynth.stages.optics import psf_kernel
 from gongsynth.analysis.statistics import disk_coordinates
+from gongsynth.stages.optics import psf_kernel
 
 
 def hmi_like(size, scale):
@@ -38,7 +38,7 @@ def hmi_like(size, scale):
     c = (size - 1) / 2
     rsun = 945.0 / scale
     data = rng.normal(0, 8.0, (size, size))
-    for k in range(6):  # bipoles
+    for _ in range(6):  # bipoles
         px, py = rng.uniform(0.3, 0.7, 2) * size
         data += 800 * (np.exp(-((x - px) ** 2 + (y - py) ** 2) / (2 * (8 / scale) ** 2))
                        - np.exp(-((x - px - 30 / scale) ** 2 + (y - py) ** 2) / (2 * (8 / scale) ** 2)))

@@ -26,14 +26,14 @@ import numpy as np
 import scipy.ndimage
 import scipy.signal
 
-from gongsynth.geometry import Pointing
 from gongsynth import GONGInstrument
+from gongsynth.geometry import Pointing
+from gongsynth.stages.channels import channel_images, polarized_spectra
 from gongsynth.stages.filters import channel_weights
 from gongsynth.stages.optics import expected_counts, observe, photometric_factor, psf_kernel
-from gongsynth.sun.photosphere import model_photosphere, synthesize
-from gongsynth.stages.channels import channel_images, polarized_spectra
 from gongsynth.stages.scene.scene import radiance_at_earth
 from gongsynth.stages.scene.tiled import tile, tiled_scenes
+from gongsynth.sun.photosphere import model_photosphere, synthesize
 
 
 def timed(label, func, *args, **kwargs):
@@ -83,7 +83,8 @@ def main():
     tracemalloc.start()
     planes, t_filter = timed("channel_images (Mueller + filter)", channel_images, cube, instrument=inst)
     (light, truth), t_tile = timed("tiled_scenes (4 resolutions)", tiled_scenes, planes, cube.blos,
-                                   cube.pixel_size, pointing=Pointing(latitude), shape=args.grid, instrument=inst)
+                                   cube.pixel_size, pointing=Pointing(latitude), shape=args.grid,
+                                   instrument=inst)
     _, peak_scene = tracemalloc.get_traced_memory()
     tracemalloc.reset_peak()
     before, _ = tracemalloc.get_traced_memory()

@@ -14,7 +14,6 @@ import resource
 import time
 import tracemalloc
 
-import astropy.units as u
 import numba
 import numpy as np
 

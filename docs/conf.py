@@ -43,7 +43,8 @@ extensions = [
     "sphinx_automodapi.smart_resolver",
     "sphinx_gallery.gen_gallery",
     "gongsynth_params",
-    "gongsynth_cli",
+    "gongsynth_config",
+    "sphinxarg.ext",
     "gongsynth_validation",
 ]
 # MathJax served from the built site itself, so equations render offline; without

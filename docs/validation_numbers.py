@@ -24,8 +24,8 @@ import astropy.constants as const
 import astropy.units as u
 import numpy as np
 
-from gongsynth.geometry import Pointing
 from gongsynth import GONGInstrument
+from gongsynth.geometry import Pointing
 from gongsynth.stages import filters
 from gongsynth.stages.reduction import reduce
 
@@ -187,12 +187,12 @@ def _wrapping():
 
 
 def _filter_first():
-    from gongsynth.stages.optics import observe
-    from gongsynth.sun.photosphere import Photosphere, synthesize
+    from gongsynth.geometry import viewing_geometry
     from gongsynth.stages.channels import channel_images, polarized_spectra
+    from gongsynth.stages.optics import observe
     from gongsynth.stages.scene.scene import radiance_at_earth
     from gongsynth.stages.scene.tiled import tile, tiled_scenes
-    from gongsynth.geometry import viewing_geometry
+    from gongsynth.sun.photosphere import Photosphere, synthesize
 
     rng = np.random.default_rng(5)
     shape = (16, 16)

@@ -23,9 +23,9 @@ from pathlib import Path
 import astropy.units as u
 import matplotlib.pyplot as plt
 import numpy as np
-from matplotlib.colors import Normalize
 import sunpy.data.test
 from astropy.io import fits
+from matplotlib.colors import Normalize
 
 import gongsynth
 from gongsynth.analysis.compare import (
@@ -111,7 +111,8 @@ hdu.scale("int16", bscale=header["BSCALE"], bzero=0)
 path = Path(tempfile.mkdtemp()) / "gong_format_zqa.fits"
 hdu.writeto(path)
 gong_format = load_observation(path)
-print(type(gong_format).__name__, gong_format.unit, f"quiet-Sun noise {noise_estimate(gong_format).sigma:.2f}")
+sigma = noise_estimate(gong_format).sigma
+print(type(gong_format).__name__, gong_format.unit, f"quiet-Sun noise {sigma:.2f}")
 
 # %%
 # The simulated GONG magnetogram

@@ -19,11 +19,11 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from gongsynth import GONGInstrument
-from gongsynth.stages.camera.integrate import integrate
-from gongsynth.stages.filters import channel_weights
 from gongsynth.planes import PLANE_NAMES
-from gongsynth.stages.reduction import reduce
+from gongsynth.stages.camera.integrate import integrate
 from gongsynth.stages.camera.schedule import frame_schedule
+from gongsynth.stages.filters import channel_weights
+from gongsynth.stages.reduction import reduce
 
 gong = GONGInstrument()
 

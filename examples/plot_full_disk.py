@@ -23,10 +23,10 @@ import sunpy.map
 
 from gongsynth import GONGInstrument
 from gongsynth.geometry import disk_geometry
-from gongsynth.stages.scene.fulldisk import full_disk_scene
 from gongsynth.stages.optics import expected_counts, observe
-from gongsynth.sun.photosphere import model_photosphere
 from gongsynth.stages.reduction import reduce
+from gongsynth.stages.scene.fulldisk import full_disk_scene
+from gongsynth.sun.photosphere import model_photosphere
 
 # %%
 # The built-in photosphere repeats every 98 Mm, so a sunspot in it would appear

@@ -48,7 +48,7 @@ def import_optional(module, extra):
     >>> import_optional("not_a_module_gongsynth_needs", "rt")
     Traceback (most recent call last):
     ...
-    ImportError: this feature of gongsynth needs the optional dependency not_a_module_gongsynth_needs: pip install 'gongsynth[rt]'
+    ImportError: this feature of gongsynth needs the optional dependency ...: pip install 'gongsynth[rt]'
     """
     try:
         return importlib.import_module(module)

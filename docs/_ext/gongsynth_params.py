@@ -107,7 +107,7 @@ class ParameterTable(Directive):
         try:
             rows = parameter_rows(stage)
         except ValueError as exc:
-            raise self.error(str(exc))
+            raise self.error(str(exc)) from exc
         lines = []
         if stage is not None:
             lines += _table(rows)
@@ -118,6 +118,7 @@ class ParameterTable(Directive):
                 lines += _table([row for row in rows if row[3] == title]) + [""]
         # Re-read this page whenever the instrument's source changes.
         import inspect
+
         from gongsynth import instrument
         self.state.document.settings.env.note_dependency(inspect.getsourcefile(instrument))
         container = nodes.container()
