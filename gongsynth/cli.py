@@ -5,7 +5,8 @@ The ``gongsynth`` command line.
 
     gongsynth simulate [--config run.toml] [--latitude 60] [--duration 10] [--engine frames]
                        [--seed 1] [--workers N] [--mode tiled|full-disk] [--shape 256]
-                       [--overwrite] [--quiet] --out DIR
+                       [--obstime ISO] [--no-psf] [--no-photon-noise] ... [--overwrite] [--quiet]
+                       --out DIR
     gongsynth compare SIM.fits OBS.fits [--out FIGURE.png]
     gongsynth config --print-defaults
 
@@ -13,11 +14,15 @@ Exit codes: 0 success, 1 runtime failure, 2 bad usage or bad input (the
 message names the argument), 3 refusing to overwrite existing output.
 """
 import argparse
+import dataclasses
 import sys
 from pathlib import Path
 
 import astropy.units as u
 
+from sunpy import log
+
+from gongsynth.config import ENGINES, MODES, Effects
 from gongsynth.version import version as __version__
 
 __all__ = ["main", "build_parser"]
@@ -50,8 +55,10 @@ def build_parser():
                      help="heliographic latitude(s) in degrees; several run a sweep "
                           "(e.g. --latitude 0 25 45 60 70 75)")
     sim.add_argument("--duration", type=float, metavar="MIN", help="observation length in minutes")
-    sim.add_argument("--engine", choices=("blocks", "frames"), help="camera engine")
-    sim.add_argument("--mode", choices=("tiled", "full-disk"), help="scene mode")
+    sim.add_argument("--engine", choices=ENGINES, help="camera engine")
+    sim.add_argument("--mode", choices=MODES, help="scene mode")
+    sim.add_argument("--obstime", metavar="ISO", help="observation time, e.g. 2009-09-05T18:54 "
+                                                      "(sets B0, the observer and the map dates)")
     sim.add_argument("--seed", type=int, help="root random seed (default: fresh, recorded)")
     sim.add_argument("--shape", type=int, metavar="N", help="detector side in pixels (default 860)")
     sim.add_argument("--workers", type=int, metavar="N",
@@ -59,6 +66,12 @@ def build_parser():
     sim.add_argument("--out", type=Path, required=True, help="output directory")
     sim.add_argument("--overwrite", action="store_true", help="replace existing output files")
     sim.add_argument("--quiet", action="store_true", help="no progress bars or messages")
+    effects = sim.add_argument_group(
+        "instrument effects", "switch an effect off to see what it does (TOML: [effects])")
+    for effect in dataclasses.fields(Effects):
+        flag = effect.name.replace("_", "-")
+        effects.add_argument(f"--no-{flag}", dest=f"no_{effect.name}", action="store_true",
+                             help=f"switch off the {effect.name.replace('_', ' ')}")
 
     cmp_ = sub.add_parser("compare", help="compare a simulated map with an observed one")
     cmp_.add_argument("simulated", type=Path, help="gongsynth magnetogram FITS")
@@ -79,9 +92,12 @@ def _simulation_config(args):
     changes = {}
     if args.duration is not None:
         changes["duration"] = args.duration * u.min
-    for name in ("engine", "mode", "seed", "workers"):
+    for name in ("engine", "mode", "seed", "workers", "obstime"):
         if getattr(args, name) is not None:
             changes[name] = getattr(args, name)
+    off = {e.name: False for e in dataclasses.fields(Effects) if getattr(args, f"no_{e.name}")}
+    if off:
+        changes["effects"] = dataclasses.replace(config.effects, **off)
     if args.shape is not None:
         changes["detector_shape"] = args.shape
     if args.latitude and len(args.latitude) == 1:
@@ -113,7 +129,8 @@ def _run_simulate(args):
         result = simulate(config=config, progress=progress)
         paths = result.save(args.out, overwrite=args.overwrite)
         _say(args, "wrote " + ", ".join(str(p) for p in paths))
-        _say(args, result.summary())
+        if not args.quiet:
+            print(result.summary())
     return EXIT_OK
 
 
@@ -131,8 +148,9 @@ def _run_compare(args):
 
 
 def _say(args, message):
+    """Informational messages go through sunpy's logger (silenced by --quiet)."""
     if not getattr(args, "quiet", False):
-        print(message)
+        log.info(message)
 
 
 def main(argv=None):

@@ -2,31 +2,44 @@
 Run configuration: everything needed to repeat a simulation bit for bit.
 
 A `SimulationConfig` maps one-to-one onto the keyword arguments of
-`gongsynth.simulate` (the ``[simulation]`` table of a TOML file) plus a
-`~gongsynth.GONGInstrument` (the ``[instrument]`` table).  Unknown keys and
-quantities in the wrong units are errors that name the key.
+`gongsynth.simulate` (the ``[simulation]`` table of a TOML file), plus the
+`Effects` that can be switched off (``[effects]``), the knobs of the built-in
+model photosphere (``[photosphere]``) and a `~gongsynth.GONGInstrument`
+(``[instrument]``).  Unknown keys and quantities in the wrong units are errors
+that name the key.
 """
 import dataclasses
+import hashlib
+import inspect
 import tomllib
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 import astropy.units as u
+import numpy as np
+import tomlkit
 from astropy.time import Time
 
-from gongsynth.instrument import GONGInstrument
 from gongsynth.geometry import DEFAULT_OBSTIME as _DEFAULT_TIME
+from gongsynth.geometry import Pointing
+from gongsynth.instrument import GONGInstrument
 from gongsynth.seeding import root_seed
-from gongsynth.tomlfmt import toml_value
+from gongsynth.stages.camera.integrate import ENGINES
+from gongsynth.sun.photosphere import model_photosphere
+from gongsynth.tomlfmt import toml_table
 
-__all__ = ["SimulationConfig", "ENGINES", "MODES", "DEFAULT_OBSTIME"]
+__all__ = ["SimulationConfig", "Effects", "ENGINES", "MODES", "DEFAULT_OBSTIME", "IN_MEMORY",
+           "fingerprint"]
 
-#: Camera engines accepted by `SimulationConfig.engine`.
-ENGINES = ("blocks", "frames")
 #: Scene modes accepted by `SimulationConfig.mode`.
 MODES = ("tiled", "full-disk")
 #: Default observation time (B0 ≈ 0), as an ISO string.
 DEFAULT_OBSTIME = _DEFAULT_TIME.isot
+#: The recorded "path" of a flat or dark that was passed as an array.
+IN_MEMORY = "<array>"
+
+#: Knobs of `~gongsynth.sun.photosphere.model_photosphere` set by [simulation] instead of [photosphere].
+_PHOTOSPHERE_RUN_KEYS = ("shape", "pixel_size", "seed")
 
 _QUANTITIES = {
     "latitude": (u.deg, "heliographic latitude of the field centre on the central meridian"),
@@ -42,7 +55,158 @@ _DOCS = {
     "obstime": "observation time (ISO); sets the observer position and the map dates",
     "photosphere_shape": "pixels of the built-in model photosphere (ny, nx)",
     "workers": "threads for the frames engine (None: all cores)",
+    "flat_file": "a user-supplied flat: its FITS path, or '<array>' (unset: the synthetic flat)",
+    "flat_sha256": "SHA-256 of that flat, checked when the run is repeated",
+    "dark_file": "a user-supplied dark: its FITS path, or '<array>' (unset: the synthetic dark)",
+    "dark_sha256": "SHA-256 of that dark, checked when the run is repeated",
 }
+
+
+@dataclass(frozen=True)
+class Effects:
+    """
+    The instrument's effects that a run can switch off (TOML ``[effects]``; CLI ``--no-<effect>``).
+
+    Every effect is on by default (the real instrument).  Switching one off
+    shows what it does to the measurement: e.g. ``photon_noise=False,
+    read_noise=False`` gives the noiseless magnetogram of the same Sun.
+
+    Parameters
+    ----------
+    psf : bool
+        The optics' point-spread function (aperture diffraction and seeing).
+    seeing : bool
+        The atmospheric seeing part of the PSF (off: diffraction only).
+    flat : bool
+        The detector flat field (off: a perfectly uniform detector).
+    dark : bool
+        The dark current (off: none).
+    photon_noise : bool
+        Poisson noise of the photo-electrons (off: the expected counts).
+    read_noise : bool
+        Gaussian read noise per frame.
+    dither : bool
+        The dither added before truncation.
+    truncation : bool
+        Dropping the lowest bits after accumulation.
+
+    Examples
+    --------
+    >>> Effects(photon_noise=False).off
+    ('photon_noise',)
+    """
+
+    psf: bool = True
+    seeing: bool = True
+    flat: bool = True
+    dark: bool = True
+    photon_noise: bool = True
+    read_noise: bool = True
+    dither: bool = True
+    truncation: bool = True
+
+    def __post_init__(self):
+        for f in fields(self):
+            if not isinstance(getattr(self, f.name), bool):
+                raise TypeError(f"effects.{f.name} must be true or false, got {getattr(self, f.name)!r}")
+
+    @property
+    def off(self):
+        """Names of the effects switched off."""
+        return tuple(f.name for f in fields(self) if not getattr(self, f.name))
+
+    @classmethod
+    def from_dict(cls, table, *, where="effects"):
+        """
+        Build from a parsed TOML table, naming unknown keys.
+
+        Parameters
+        ----------
+        table : dict
+        where : str
+            The table's name for messages.
+
+        Returns
+        -------
+        `Effects`
+        """
+        known = [f.name for f in fields(cls)]
+        bad = [k for k in table if k not in known]
+        if bad:
+            raise KeyError(f"unknown key(s) {bad} in [{where}]; valid keys are {known}")
+        return cls(**table)
+
+
+def photosphere_defaults():
+    """
+    The knobs of `~gongsynth.sun.photosphere.model_photosphere` that ``[photosphere]`` sets, with their defaults.
+
+    Shape, pixel size and seed are run arguments (``photosphere_shape``,
+    ``photosphere_pixel_size``, ``seed``) and are not among them.
+
+    Returns
+    -------
+    dict
+
+    Examples
+    --------
+    >>> photosphere_defaults()["umbra_field"]
+    <Quantity 3000. G>
+    """
+    return {name: p.default for name, p in inspect.signature(model_photosphere).parameters.items()
+            if name not in _PHOTOSPHERE_RUN_KEYS}
+
+
+def _photosphere_knobs(values, where="photosphere"):
+    """Defaults completed by ``values``, each checked against its default's type and unit."""
+    defaults = photosphere_defaults()
+    bad = [k for k in values if k not in defaults]
+    if bad:
+        raise KeyError(f"unknown key(s) {bad} in [{where}]; valid keys are {sorted(defaults)}")
+    knobs = dict(defaults)
+    for name, value in values.items():
+        default = defaults[name]
+        if isinstance(default, u.Quantity):
+            value = _quantity(name, value, default.unit, where)
+        elif isinstance(default, bool):
+            if not isinstance(value, bool):
+                raise TypeError(f"[{where}] {name} must be true or false, got {value!r}")
+        elif isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise TypeError(f"[{where}] {name} must be a number, got {value!r}")
+        knobs[name] = value
+    return knobs
+
+
+def fingerprint(data):
+    """
+    SHA-256 of a detector map given as a FITS path or an array (values and unit).
+
+    Parameters
+    ----------
+    data : path-like, array_like or `~astropy.units.Quantity`
+
+    Returns
+    -------
+    str
+        Hex digest.
+
+    Examples
+    --------
+    >>> fingerprint([1.0, 2.0]) == fingerprint(np.array([1.0, 2.0]))
+    True
+    """
+    digest = hashlib.sha256()
+    if isinstance(data, (str, Path)):
+        with open(data, "rb") as handle:
+            for block in iter(lambda: handle.read(1 << 20), b""):
+                digest.update(block)
+        return digest.hexdigest()
+    unit = data.unit.to_string() if isinstance(data, u.Quantity) else ""
+    values = np.ascontiguousarray(u.Quantity(data).value if unit else np.asarray(data), dtype=np.float64)
+    digest.update(repr(values.shape).encode())
+    digest.update(values.tobytes())
+    digest.update(unit.encode())
+    return digest.hexdigest()
 
 
 @dataclass(frozen=True)
@@ -74,6 +238,16 @@ class SimulationConfig:
         Pixel size of the built-in model photosphere (length).
     workers : int or None
         Threads for the frames engine.
+    effects : `Effects`
+        The instrument effects that are on.
+    photosphere : dict
+        Knobs of the built-in model photosphere (`photosphere_defaults`
+        completed by the values given).
+    flat_file, dark_file : str or None
+        A user-supplied flat or dark: its FITS path, or ``"<array>"`` when it
+        was passed as an array (None: the instrument's synthetic one).
+    flat_sha256, dark_sha256 : str or None
+        Their `fingerprint`, checked when the run is repeated.
     instrument : `~gongsynth.GONGInstrument`
         The instrument.
 
@@ -95,6 +269,12 @@ class SimulationConfig:
     photosphere_shape: tuple = (1024, 1024)
     photosphere_pixel_size: u.Quantity = 96 * u.km
     workers: int | None = None
+    effects: Effects = field(default_factory=Effects)
+    photosphere: dict = field(default_factory=dict)
+    flat_file: str | None = None
+    flat_sha256: str | None = None
+    dark_file: str | None = None
+    dark_sha256: str | None = None
     instrument: GONGInstrument = field(default_factory=GONGInstrument)
 
     def __post_init__(self):
@@ -102,8 +282,6 @@ class SimulationConfig:
             value = getattr(self, name)
             if not isinstance(value, u.Quantity) or not value.unit.is_equivalent(unit):
                 raise u.UnitsError(f"{name} must be a Quantity convertible to {unit}, got {value!r}")
-        if not -90 * u.deg < self.latitude < 90 * u.deg:
-            raise ValueError(f"latitude must lie in (-90 deg, 90 deg), got {self.latitude}")
         if self.duration <= 0 * u.s:
             raise ValueError(f"duration must be positive, got {self.duration}")
         if self.engine not in ENGINES:
@@ -124,14 +302,18 @@ class SimulationConfig:
         if len(shape) != 2 or any(not isinstance(n, int) or n < 4 for n in shape):
             raise ValueError(f"photosphere_shape must be two ints >= 4, got {self.photosphere_shape!r}")
         object.__setattr__(self, "photosphere_shape", shape)
-        try:
-            Time(self.obstime)
-        except ValueError as exc:
-            raise ValueError(f"obstime must be an ISO time string, got {self.obstime!r}") from exc
+        Pointing(self.latitude, self.obstime)  # checks the latitude and the time, once, in one place
         if self.workers is not None and (not isinstance(self.workers, int) or self.workers < 1):
             raise ValueError(f"workers must be a positive int or None, got {self.workers!r}")
         if not isinstance(self.instrument, GONGInstrument):
             raise TypeError(f"instrument must be a GONGInstrument, got {type(self.instrument).__name__}")
+        if not isinstance(self.effects, Effects):
+            raise TypeError(f"effects must be an Effects, got {type(self.effects).__name__}")
+        object.__setattr__(self, "photosphere", _photosphere_knobs(dict(self.photosphere)))
+        for name in ("flat", "dark"):
+            path, digest = getattr(self, f"{name}_file"), getattr(self, f"{name}_sha256")
+            if (path is None) != (digest is None):
+                raise ValueError(f"{name}_file and {name}_sha256 go together: got {path!r} and {digest!r}")
 
     @classmethod
     def from_arguments(cls, *, seed=None, instrument=None, **kwargs):
@@ -180,17 +362,18 @@ class SimulationConfig:
 
     def simulation_arguments(self):
         """
-        The fields except ``instrument``, as keyword arguments for `gongsynth.simulate`.
+        The ``[simulation]`` table's fields and values.
 
         Returns
         -------
         dict
         """
-        return {f.name: getattr(self, f.name) for f in fields(self) if f.name != "instrument"}
+        return {f.name: getattr(self, f.name) for f in fields(self)
+                if f.name not in ("instrument", "effects", "photosphere")}
 
     def to_toml(self, *, comments=True):
         """
-        The configuration as TOML: a ``[simulation]`` and an ``[instrument]`` table.
+        The configuration as TOML: ``[simulation]``, ``[effects]``, ``[photosphere]`` and ``[instrument]``.
 
         Parameters
         ----------
@@ -201,24 +384,18 @@ class SimulationConfig:
         -------
         str
         """
-        lines = ["# gongsynth run configuration", "[simulation]"]
-        for name, value in self.simulation_arguments().items():
-            doc = _QUANTITIES[name][1] if name in _QUANTITIES else _DOCS.get(name, "")
-            if value is None:
-                # Unset: show the effective default, commented out.
-                example = self.instrument.detector_shape if name == "detector_shape" else 2
-                lines.append(f"# {doc}; unset by default")
-                lines.append(f"# {name} = {example}")
-                continue
-            if comments:
-                lines.append(f"# {doc}")
-            lines.append(f"{name} = {toml_value(value)}")
-        lines.append("")
-        instrument = self.instrument.to_toml()
-        if not comments:
-            instrument = "\n".join(l for l in instrument.splitlines() if not l.startswith("#"))
-        lines.append(instrument)
-        return "\n".join(l for l in lines if l is not None) + "\n"
+        doc = tomlkit.document()
+        doc.add(tomlkit.comment("gongsynth run configuration"))
+        doc.add("simulation", toml_table(
+            [(name, value, _QUANTITIES[name][1] if name in _QUANTITIES else _DOCS.get(name, ""))
+             for name, value in self.simulation_arguments().items()], comments=comments))
+        doc.add("effects", toml_table(
+            [(name, value, "") for name, value in dataclasses.asdict(self.effects).items()],
+            comments=comments))
+        doc.add("photosphere", toml_table(
+            [(name, value, "") for name, value in self.photosphere.items()], comments=comments))
+        doc.add("instrument", self.instrument.toml_table(comments=comments))
+        return tomlkit.dumps(doc)
 
     @classmethod
     def from_toml(cls, source):
@@ -254,17 +431,19 @@ class SimulationConfig:
         Parameters
         ----------
         table : dict
-            ``{"simulation": {...}, "instrument": {...}}``; both optional.
+            ``{"simulation": {...}, "effects": {...}, "photosphere": {...}, "instrument": {...}}``;
+            every table optional.
 
         Returns
         -------
         `SimulationConfig`
         """
-        unknown = [k for k in table if k not in ("simulation", "instrument")]
+        tables = ("simulation", "effects", "photosphere", "instrument")
+        unknown = [k for k in table if k not in tables]
         if unknown:
-            raise KeyError(f"unknown table(s) {unknown}; expected [simulation] and [instrument]")
+            raise KeyError(f"unknown table(s) {unknown}; expected {', '.join(f'[{t}]' for t in tables)}")
         sim = dict(table.get("simulation", {}))
-        known = {f.name for f in fields(cls)} - {"instrument"}
+        known = set(cls().simulation_arguments())
         bad = [k for k in sim if k not in known]
         if bad:
             raise KeyError(f"unknown key(s) {bad} in [simulation]; valid keys are {sorted(known)}")
@@ -274,16 +453,20 @@ class SimulationConfig:
         for name in ("resolutions", "photosphere_shape"):
             if name in sim:
                 sim[name] = tuple(sim[name])
-        instrument = GONGInstrument.from_dict(table.get("instrument", {}))
-        return cls(instrument=instrument, **sim)
+        return cls(instrument=GONGInstrument.from_dict(table.get("instrument", {})),
+                   effects=Effects.from_dict(table.get("effects", {})),
+                   photosphere=_photosphere_knobs(table.get("photosphere", {})), **sim)
 
 
-def _quantity(name, value, unit):
-    if isinstance(value, u.Quantity):
-        return value
+def _quantity(name, value, unit, where="simulation"):
+    """A TOML value (a string such as "7 Mm", or a Quantity) as a Quantity convertible to ``unit``."""
     if isinstance(value, str):
         try:
-            return u.Quantity(value)
+            value = u.Quantity(value)
         except (TypeError, ValueError) as exc:
-            raise ValueError(f"[simulation] {name} = {value!r} is not a quantity like '1 {unit}'") from exc
-    raise u.UnitsError(f"[simulation] {name} needs units, e.g. {name} = \"{value} {unit}\"")
+            raise ValueError(f"[{where}] {name} = {value!r} is not a quantity like '1 {unit}'") from exc
+    if not isinstance(value, u.Quantity):
+        raise u.UnitsError(f"[{where}] {name} needs units, e.g. {name} = \"{value} {unit}\"")
+    if not value.unit.is_equivalent(unit):
+        raise u.UnitsError(f"[{where}] {name} must be in units convertible to {unit}, got {value.unit}")
+    return value

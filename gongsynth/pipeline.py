@@ -1,23 +1,25 @@
 """
-The whole chain: photosphere → spectra → filters → scene → optics → camera → reduction → Maps.
+Running a simulation: `simulate` (one observation) and `simulate_many` (a sweep).
 
-`simulate` runs one observation; `simulate_many` runs a sweep (latitudes,
-seeds) serially or on Dask, with results identical to the serial runs because
-every random stream is derived from the run's seed and the stage name only.
+`simulate` builds the run's `~gongsynth.chain.Chain` of stages from its
+configuration (photosphere → spectra → channels → scene → optics → camera →
+reduction → maps) and runs it.  `simulate_many` runs a sweep (latitudes, seeds)
+serially or on Dask, with results identical to the serial runs because every
+random stream is derived from the run's seed and the stage name only.
 """
-import time
+import inspect
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import astropy.units as u
 import numpy as np
 
+from gongsynth.chain import build_chain
+from gongsynth.config import IN_MEMORY, Effects, SimulationConfig, fingerprint
+from gongsynth.optional import import_optional
 from gongsynth.version import version as __version__
-from gongsynth.config import SimulationConfig
-from gongsynth.products.maps import make_product_map
-from gongsynth.stages.reduction import reduce
-from gongsynth.seeding import child_sequence
 
-__all__ = ["SimulationResult", "simulate", "simulate_many"]
+__all__ = ["SimulationResult", "Sweep", "simulate", "simulate_many"]
 
 @dataclass
 class SimulationResult:
@@ -38,7 +40,7 @@ class SimulationResult:
         The same seen through the instrument PSF first.
     raw : `~gongsynth.stages.camera.integrate.RawPlanes`
         The six accumulated raw planes.
-    scene : `~astropy.units.Quantity`
+    expected_counts : `~astropy.units.Quantity`
         Expected electrons per frame per pixel, shape (6, ny, nx), before noise.
     resolution_map : `numpy.ndarray`
         Tile magnification of each detector pixel (1 = GONG resolution).
@@ -46,6 +48,8 @@ class SimulationResult:
         Everything needed to repeat the run bit for bit.
     timings : dict
         Wall-clock seconds of each stage.
+    chain : `~gongsynth.chain.Chain`
+        The stages that ran, in order.
     """
 
     magnetogram: object
@@ -54,10 +58,11 @@ class SimulationResult:
     truth: object
     truth_psf: object
     raw: object
-    scene: u.Quantity
+    expected_counts: u.Quantity
     resolution_map: np.ndarray
     config: SimulationConfig
     timings: dict = field(default_factory=dict)
+    chain: object = None
 
     def summary(self):
         """
@@ -70,8 +75,9 @@ class SimulationResult:
         cfg = self.config
         b = self.magnetogram.data
         lines = [
-            f"gongsynth {__version__}: {cfg.mode} scene at latitude {cfg.latitude:.1f}, "
-            f"{cfg.duration:.1f}, engine {cfg.engine}, seed {cfg.seed}",
+            f"gongsynth {__version__}: {cfg.mode} scene"
+            + (f" at latitude {cfg.latitude:.1f}" if cfg.mode == "tiled" else "")
+            + f", {cfg.duration:.1f}, engine {cfg.engine}, seed {cfg.seed}",
             f"  magnetogram {b.shape[1]}x{b.shape[0]} px: mean {np.nanmean(b):+.2f} G, "
             f"std {np.nanstd(b):.1f} G, range {np.nanmin(b):+.0f} .. {np.nanmax(b):+.0f} G",
         ]
@@ -105,10 +111,45 @@ class SimulationResult:
         return save_result(self, directory, overwrite=overwrite, quicklook=quicklook)
 
 
+class Sweep(list):
+    """
+    The results of `simulate_many`, in run order, with their maps as sunpy sequences.
+
+    Examples
+    --------
+    >>> import astropy.units as u
+    >>> sweep = simulate_many(latitudes=[0, 45] * u.deg, seed=2, detector_shape=16,
+    ...                       duration=1 * u.min, resolutions=(1,), photosphere_shape=(64, 64),
+    ...                       photosphere_pixel_size=1536 * u.km, progress=False)
+    >>> len(sweep.map_sequence("magnetogram"))
+    2
+    """
+
+    def map_sequence(self, product="magnetogram"):
+        """
+        One product of every run as a `sunpy.map.MapSequence`.
+
+        Parameters
+        ----------
+        product : {"magnetogram", "doppler", "continuum", "truth", "truth_psf"}
+
+        Returns
+        -------
+        `sunpy.map.MapSequence`
+        """
+        import sunpy.map
+
+        names = ("magnetogram", "doppler", "continuum", "truth", "truth_psf")
+        if product not in names:
+            raise ValueError(f"product must be one of {names}, got {product!r}")
+        return sunpy.map.Map([getattr(result, product) for result in self], sequence=True)
+
+
 def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="blocks", seed=None,
              instrument=None, mode="tiled", detector_shape=None, resolutions=(1, 2, 4, 8),
              obstime=None, photosphere_shape=(1024, 1024), photosphere_pixel_size=96 * u.km,
-             flat=None, dark=None, workers=None, progress=True, config=None):
+             effects=None, photosphere=None, flat=None, dark=None, workers=None, progress=True,
+             config=None):
     """
     Simulate a GONG observation end to end.
 
@@ -139,17 +180,26 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="bl
         Pixels of the built-in model photosphere (used when ``stokes`` is None).
     photosphere_pixel_size : `~astropy.units.Quantity`
         Its pixel size (length; 96 km like the paper's binned MURaM cube).
+    effects : `~gongsynth.config.Effects` or dict, optional
+        Instrument effects to switch off, e.g. ``{"photon_noise": False}``
+        (default: all on).
+    photosphere : dict, optional
+        Knobs of the built-in model photosphere
+        (`~gongsynth.sun.photosphere.model_photosphere`), e.g.
+        ``{"spot": False}``.
     flat, dark : optional
-        Detector flat field and dark map (see `gongsynth.stages.camera.integrate.integrate`);
-        default the synthetic GONG-like ones.
+        Detector flat field and dark map, arrays or FITS paths (see
+        `gongsynth.stages.camera.integrate.integrate`); default the
+        instrument's synthetic ones.  The config records a user-supplied one
+        (path or ``"<array>"`` and its SHA-256), and repeating the run checks it.
     workers : int, optional
         Threads for the frames engine and the FFTs.
     progress : bool
         Show progress bars.
     config : `~gongsynth.config.SimulationConfig`, optional
         A complete configuration (e.g. ``result.config`` of an earlier run);
-        when given, the other keyword arguments except ``stokes``, ``flat``,
-        ``dark`` and ``progress`` are ignored.
+        it cannot be combined with the run arguments above (that is a
+        TypeError), only with ``stokes``, ``flat``, ``dark`` and ``progress``.
 
     Returns
     -------
@@ -167,151 +217,65 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="bl
     >>> result.magnetogram.unit, result.magnetogram.data.shape, result.config.seed
     (Unit("G"), (16, 16), 1)
     """
+    arguments = dict(latitude=latitude, duration=duration, engine=engine, seed=seed, instrument=instrument,
+                     mode=mode, detector_shape=detector_shape, resolutions=resolutions, obstime=obstime,
+                     photosphere_shape=photosphere_shape, photosphere_pixel_size=photosphere_pixel_size,
+                     effects=effects, photosphere=photosphere, workers=workers)
     if config is None:
-        kwargs = dict(latitude=latitude, duration=duration, engine=engine, mode=mode,
-                      detector_shape=detector_shape, resolutions=tuple(resolutions),
-                      photosphere_shape=tuple(photosphere_shape),
-                      photosphere_pixel_size=photosphere_pixel_size, workers=workers)
-        if obstime is not None:
-            kwargs["obstime"] = obstime
-        config = SimulationConfig.from_arguments(seed=seed, instrument=instrument, **kwargs)
+        given = _given(arguments)
+        if isinstance(given.get("effects"), dict):
+            given["effects"] = Effects.from_dict(given["effects"])
+        config = SimulationConfig.from_arguments(**given)
     elif not isinstance(config, SimulationConfig):
         raise TypeError(f"config must be a SimulationConfig, got {type(config).__name__}")
-    return _run(config, stokes=stokes, flat=flat, dark=dark, progress=progress)
-
-
-def _run(config, *, stokes, flat, dark, progress):
-    from gongsynth.geometry import Pointing
-    from gongsynth.stages import channels as polarimetry
-    from gongsynth.stages import optics
-    from gongsynth.stages.camera import integrate as camera
-    from gongsynth.stages.scene import tiled as scene_mod
-
-    from tqdm.auto import tqdm
-
-    inst = config.instrument
+    elif _given(arguments):
+        raise TypeError(f"pass either config or the run's arguments, not both: {sorted(_given(arguments))}")
+    config, flat = _detector_map(config, "flat", flat)
+    config, dark = _detector_map(config, "dark", dark)
+    chain = build_chain(config, stokes=stokes, flat=flat, dark=dark, progress=progress)
     timings = {}
-    clock = time.perf_counter()
-    n_stages = 7 if config.mode == "tiled" and stokes is None else 6
-    bar = tqdm(total=n_stages, desc="gongsynth: spectra", disable=not progress, unit="stage",
-               bar_format="{desc:<28s}{bar}| {n_fmt}/{total_fmt} [{elapsed}]")
-    upcoming = {"photosphere": "spectra", "synthesis": "filters", "filters": "scene",
-                "scene": "optics", "synthesis+scene": "optics", "optics": "camera",
-                "camera": "reduction", "reduction": "maps", "maps": "done"}
+    state = chain.run(progress=progress, timings=timings)
+    return SimulationResult(
+        magnetogram=state["magnetogram_map"], doppler=state["doppler_map"],
+        continuum=state["continuum_map"], truth=state["truth_map"], truth_psf=state["truth_psf_map"],
+        raw=state["raw"], expected_counts=state["expected_counts"],
+        resolution_map=state["light"].resolution_map(), config=config, timings=timings, chain=chain)
 
-    def lap(name):
-        nonlocal clock
-        now = time.perf_counter()
-        timings[name] = now - clock
-        clock = now
-        bar.set_description_str(f"gongsynth: {upcoming[name]}")
-        bar.update(1)
 
-    if config.mode == "full-disk":
-        if stokes is not None:
-            raise ValueError("mode='full-disk' synthesises the built-in photosphere at every "
-                             "point's own viewing angle; it does not take a stokes cube")
-        from gongsynth.stages.scene import fulldisk
-        photosphere = _photosphere(config)
-        lap("photosphere")
-        light, truth_scene = fulldisk.full_disk_scene(
-            photosphere, detector_shape=config.detector_pixels, obstime=config.obstime,
-            instrument=inst, progress=progress)
-        lap("synthesis+scene")
-    else:
-        if stokes is None:
-            from gongsynth.sun.photosphere import synthesize
+def _detector_map(config, name, given):
+    """
+    The flat or dark to use, with ``config`` recording it (path or "<array>", and SHA-256).
 
-            pointing = Pointing(config.latitude, config.obstime)
-            stokes = synthesize(_photosphere(config), mu=pointing.mu, los_azimuth=pointing.los_azimuth,
-                                instrument=inst)
-            lap("synthesis")
+    A config that records a user-supplied map needs the same map again: read
+    from its path when that still holds it, else passed by the caller.
+    """
+    recorded_file, recorded_sha = getattr(config, f"{name}_file"), getattr(config, f"{name}_sha256")
+    if given is None:
+        if recorded_file is None:
+            return config, None
+        if recorded_file != IN_MEMORY and Path(recorded_file).is_file():
+            given = Path(recorded_file)
         else:
-            Pointing(config.latitude, config.obstime).check_mu(stokes.mu)
-        channels = polarimetry.channel_images(stokes, instrument=inst)
-        lap("filters")
-        light, truth_scene = scene_mod.tiled_scenes(
-            channels, stokes.blos, stokes.pixel_size, pointing=Pointing(config.latitude, config.obstime),
-            detector_shape=config.detector_pixels,
-            resolutions=config.resolutions, instrument=inst)
-        lap("scene")
-
-    counts = optics.expected_counts(light, inst, workers=config.workers)
-    truth, truth_psf = None, None
-    if truth_scene is not None:
-        truth = optics.observe(truth_scene.data, truth_scene.pixel_scale, instrument=inst,
-                               psf=False, boundary=truth_scene.boundary)
-        truth_psf = optics.observe(truth_scene.data, truth_scene.pixel_scale, instrument=inst,
-                                   boundary=truth_scene.boundary, workers=config.workers)
-    lap("optics")
-
-    raw = camera.integrate(counts, duration=config.duration, engine=config.engine,
-                           seed=child_sequence(config.seed, "camera"), instrument=inst, flat=flat,
-                           dark=dark, workers=config.workers, progress=progress)
-    lap("camera")
-    observed = reduce(raw, inst)
-    # Where no sunlight falls (beyond the limb) the phases are noise: blank them
-    # as real full-disk magnetograms do.  The continuum keeps its sky values.
-    light_total = counts.sum(axis=0).value
-    sky = light_total < 1e-3 * light_total.max()
-    magnetogram, doppler = _blank(observed.magnetogram, sky), _blank(observed.doppler, sky)
-    truth, truth_psf = _blank(truth, sky), _blank(truth_psf, sky)
-    lap("reduction")
-
-    centre = light.centre
-    extra = _run_header(config)
-    products = dict(
-        magnetogram=make_product_map(magnetogram, centre=centre, scale=inst.plate_scale,
-                                     product="magnetogram", extra=extra),
-        doppler=make_product_map(doppler, centre=centre, scale=inst.plate_scale,
-                                 product="doppler", extra=extra),
-        continuum=make_product_map(observed.continuum, centre=centre, scale=inst.plate_scale,
-                                   product="continuum", extra=extra),
-        truth=None if truth is None else make_product_map(
-            truth, centre=centre, scale=inst.plate_scale, product="truth",
-            extra={**extra, "truthpsf": False}),
-        truth_psf=None if truth_psf is None else make_product_map(
-            truth_psf, centre=centre, scale=inst.plate_scale, product="truth",
-            extra={**extra, "truthpsf": True}),
-    )
-    lap("maps")
-    bar.close()
-    return SimulationResult(raw=raw, scene=counts, resolution_map=light.resolution_map(inst),
-                            config=config, timings=timings, **products)
+            raise ValueError(
+                f"this configuration was run with a user-supplied {name} ({recorded_file}, sha256 "
+                f"{recorded_sha[:12]}...): pass the same {name}= to repeat it")
+    digest = fingerprint(given)
+    if recorded_sha is not None and digest != recorded_sha:
+        raise ValueError(f"the {name} given (sha256 {digest[:12]}...) is not the one this configuration "
+                         f"recorded ({recorded_file}, sha256 {recorded_sha[:12]}...)")
+    path = str(given) if isinstance(given, (str, Path)) else IN_MEMORY
+    return config.replace(**{f"{name}_file": path, f"{name}_sha256": digest}), given
 
 
-def _blank(image, sky):
-    """``image`` (a Quantity, or None) with NaN where ``sky`` is True."""
-    if image is None:
-        return None
-    image = u.Quantity(image)
-    return np.where(sky, np.nan, image.value) * image.unit
+def _given(arguments):
+    """
+    The run arguments that were passed to `simulate` (not its defaults).
 
-
-def _photosphere(config):
-    from gongsynth.sun.photosphere import model_photosphere
-
-    return model_photosphere(shape=config.photosphere_shape,
-                             pixel_size=config.photosphere_pixel_size,
-                             seed=child_sequence(config.seed, "photosphere"))
-
-
-def _run_header(config):
-    """Header cards recording the run (instrument parameters go in the saved config)."""
-    inst = config.instrument
-    return {
-        "simlat": (config.latitude.to_value(u.deg), "[deg] field-centre latitude"),
-        "simdur": (config.duration.to_value(u.s), "[s] observation length"),
-        "engine": (config.engine, "camera engine"),
-        "simmode": (config.mode, "scene mode"),
-        "seed": (str(config.seed), "root random seed"),
-        "seeing": (inst.seeing_fwhm.to_value(u.arcsec), "[arcsec] seeing FWHM"),
-        "aeff": (inst.effective_area.to_value(u.cm**2), "[cm2] effective area"),
-        "gain": (inst.gain.to_value(u.electron / u.adu), "[e/ADU] gain"),
-        "rdnoise": (inst.read_noise.to_value(u.adu), "[ADU] read noise"),
-        "landeg": (inst.lande_g.to_value(u.one), "Lande factor used in the inversion"),
-        "v0": (inst.v0.to_value(u.m / u.s / u.rad), "[m/s/rad] Michelson velocity scale"),
-    }
+    A default is the very object in `simulate`'s signature, so identity tells
+    an untouched default from a value the caller passed (even an equal one).
+    """
+    defaults = inspect.signature(simulate).parameters
+    return {name: value for name, value in arguments.items() if value is not defaults[name].default}
 
 
 def simulate_many(*, latitudes=(0, 25, 45, 60, 70, 75) * u.deg, seeds=None, config=None,
@@ -341,9 +305,9 @@ def simulate_many(*, latitudes=(0, 25, 45, 60, 70, 75) * u.deg, seeds=None, conf
 
     Returns
     -------
-    list of `SimulationResult`
-        In the order of the runs; identical to running `simulate` on each
-        configuration serially.
+    `Sweep`
+        A list of `SimulationResult` in the order of the runs, identical to
+        running `simulate` on each configuration serially.
 
     Examples
     --------
@@ -369,9 +333,10 @@ def simulate_many(*, latitudes=(0, 25, 45, 60, 70, 75) * u.deg, seeds=None, conf
     configs = [config.replace(latitude=lat, seed=int(s)) for lat, s in zip(latitudes, seeds)]
 
     if client is None and (workers is None or workers <= 1):
-        return [simulate(config=c, progress=False) for c in tqdm(configs, disable=not progress,
-                                                                 desc="sweep")]
-    from dask.distributed import Client, LocalCluster, as_completed
+        return Sweep(simulate(config=c, progress=False)
+                     for c in tqdm(configs, disable=not progress, desc="sweep"))
+    distributed = import_optional("dask.distributed", "dask")
+    Client, LocalCluster, as_completed = distributed.Client, distributed.LocalCluster, distributed.as_completed
 
     own = client is None
     if own:
@@ -384,7 +349,7 @@ def simulate_many(*, latitudes=(0, 25, 45, 60, 70, 75) * u.deg, seeds=None, conf
         for _ in as_completed(futures):
             bar.update()
         bar.close()
-        return client.gather(futures)
+        return Sweep(client.gather(futures))
     finally:
         if own:
             client.close()
@@ -392,9 +357,12 @@ def simulate_many(*, latitudes=(0, 25, 45, 60, 70, 75) * u.deg, seeds=None, conf
 
 
 def _config_kwargs(kwargs):
-    allowed = {"duration", "engine", "seed", "instrument", "mode", "detector_shape", "resolutions",
-               "obstime", "workers", "photosphere_shape", "photosphere_pixel_size"}
+    """``simulate_many``'s run arguments, checked against `simulate`'s."""
+    allowed = set(inspect.signature(simulate).parameters) - {"stokes", "flat", "dark", "progress", "config",
+                                                               "latitude"}
+    if isinstance(kwargs.get("effects"), dict):
+        kwargs = {**kwargs, "effects": Effects.from_dict(kwargs["effects"])}
     bad = set(kwargs) - allowed
     if bad:
-        raise TypeError(f"unknown simulate_many argument(s) {sorted(bad)}")
+        raise TypeError(f"unknown simulate_many argument(s) {sorted(bad)}; valid: {sorted(allowed)}")
     return kwargs

@@ -42,3 +42,19 @@ def test_console_script_runs():
     out = subprocess.run([sys.executable, "-m", "gongsynth.cli", "--version"], capture_output=True,
                          text=True, check=True)
     assert out.stdout.startswith("gongsynth ")
+
+
+def test_effect_switches_and_obstime_reach_the_saved_config(tmp_path):
+    import astropy.units as u
+
+    cfg = SimulationConfig(seed=1, detector_shape=16, resolutions=(1,), duration=1 * u.min,
+                           photosphere_shape=(64, 64), photosphere_pixel_size=1536 * u.km)
+    path = tmp_path / "run.toml"
+    path.write_text(cfg.to_toml())
+    out = tmp_path / "o"
+    assert main(["simulate", "--config", str(path), "--no-photon-noise", "--no-read-noise",
+                 "--obstime", "2009-09-05T18:54:00", "--out", str(out), "--quiet"]) == 0
+    saved = SimulationConfig.from_toml(out / "config.toml")
+    assert saved.effects.off == ("photon_noise", "read_noise")
+    assert saved.obstime.startswith("2009-09-05T18:54")
+    assert saved.replace(effects=cfg.effects, obstime=cfg.obstime) == cfg

@@ -2,7 +2,7 @@ import astropy.units as u
 import pytest
 
 from gongsynth import GONGInstrument
-from gongsynth.config import SimulationConfig
+from gongsynth.config import Effects, SimulationConfig
 
 
 def test_default_round_trip_with_comments():
@@ -46,3 +46,22 @@ def test_seed_none_is_recorded():
     assert isinstance(a.seed, int) and 0 <= a.seed < 2**63
     assert a.seed != b.seed
     assert SimulationConfig.from_arguments(seed=5).seed == 5
+
+
+def test_strings_with_newlines_and_quotes_are_valid_toml():
+    cfg = SimulationConfig(flat_file='odd "name"\nwith a newline', flat_sha256="0" * 64)
+    assert SimulationConfig.from_toml(cfg.to_toml()) == cfg
+
+
+def test_effects_round_trip_and_unknown_effect():
+    cfg = SimulationConfig(effects=Effects(photon_noise=False, dither=False))
+    assert SimulationConfig.from_toml(cfg.to_toml()).effects.off == ("photon_noise", "dither")
+    with pytest.raises(KeyError, match="photon_nois"):
+        SimulationConfig.from_toml('[effects]\nphoton_nois = false\n')
+    with pytest.raises(TypeError, match="effects.psf"):
+        SimulationConfig.from_toml('[effects]\npsf = "no"\n')
+
+
+def test_flat_record_needs_both_path_and_digest():
+    with pytest.raises(ValueError, match="flat_sha256"):
+        SimulationConfig(flat_file="flat.fits")

@@ -7,6 +7,8 @@ from sunpy.coordinates import frames
 
 import gongsynth
 from gongsynth.analysis.calibration import calibration_curve, robust_slope
+from gongsynth.chain import build_chain
+from gongsynth.config import Effects, SimulationConfig
 from gongsynth.products.maps import GONGSynthMap
 
 # A 98 Mm tile like the paper's, coarsely sampled so the tests stay fast.
@@ -22,15 +24,8 @@ def disk_centre():
 @pytest.fixture(scope="module")
 def disk_centre_other_seed(disk_centre):
     """The same Sun (same photosphere and spectra) observed with other camera noise."""
-    from gongsynth.sun.photosphere import model_photosphere, synthesize
-    from gongsynth.geometry import viewing_geometry
-    from gongsynth.seeding import child_sequence
-
     cfg = disk_centre.config
-    photosphere = model_photosphere(shape=cfg.photosphere_shape, pixel_size=cfg.photosphere_pixel_size,
-                                    seed=child_sequence(cfg.seed, "photosphere"))
-    mu, los_azimuth = viewing_geometry(cfg.latitude, cfg.obstime)
-    stokes = synthesize(photosphere, mu=mu, los_azimuth=los_azimuth)
+    stokes = build_chain(cfg).run(until="synthesis", progress=False)["stokes"]
     same = gongsynth.simulate(stokes, config=cfg, progress=False)
     assert np.array_equal(same.magnetogram.data, disk_centre.magnetogram.data)
     return gongsynth.simulate(stokes, config=cfg.replace(seed=12), progress=False)
@@ -202,3 +197,74 @@ def test_full_disk_mode_blanks_the_sky_and_follows_the_truth():
     inner = radius < 0.7 * rsun
     slope, _ = robust_slope(result.truth_psf.data[inner], b.data[inner])
     assert 0.7 < slope < 1.0
+
+
+def test_the_chain_is_public_data(disk_centre):
+    chain = disk_centre.chain
+    assert chain.names == ("photosphere", "synthesis", "channels", "scene", "optics", "camera",
+                           "reduction", "maps")
+    assert set(disk_centre.timings) == set(chain.names)
+    # Every stage reads only what earlier stages made.
+    made = set()
+    for stage in chain:
+        assert set(stage.inputs) <= made, stage.name
+        made |= set(stage.outputs)
+    # Running the chain in two pieces gives the same bits as one run.
+    state = build_chain(disk_centre.config).run(until="optics", progress=False)
+    state = build_chain(disk_centre.config)["camera"](state)
+    assert np.array_equal(state["raw"].data, disk_centre.raw.data)
+
+
+def test_config_and_run_arguments_do_not_mix(disk_centre):
+    with pytest.raises(TypeError, match="latitude"):
+        gongsynth.simulate(config=disk_centre.config, latitude=30 * u.deg)
+    with pytest.raises(TypeError, match="seed"):
+        gongsynth.simulate(config=disk_centre.config, seed=3)
+
+
+def test_photosphere_knobs_reach_the_model():
+    cfg = SimulationConfig(seed=1, photosphere_shape=(64, 64), photosphere_pixel_size=1536 * u.km,
+                           photosphere={"spot": False, "umbra_field": "2 kG"})
+    assert cfg.photosphere["umbra_field"] == 2 * u.kG
+    again = SimulationConfig.from_toml(cfg.to_toml())
+    assert again == cfg and again.photosphere["spot"] is False
+    with_spot = build_chain(cfg.replace(photosphere={})).run(until="photosphere", progress=False)
+    without = build_chain(cfg).run(until="photosphere", progress=False)
+    assert np.abs(with_spot["photosphere"].bz).max() > 2 * np.abs(without["photosphere"].bz).max()
+    with pytest.raises(KeyError, match="umbra_feild"):
+        SimulationConfig(photosphere={"umbra_feild": 1 * u.kG})
+    with pytest.raises(u.UnitsError, match="umbra_field"):
+        SimulationConfig(photosphere={"umbra_field": 1 * u.km})
+
+
+def test_a_user_flat_is_recorded_and_required_to_repeat(tmp_path):
+    small = dict(SMALL, detector_shape=16, photosphere_shape=(64, 64), photosphere_pixel_size=1536 * u.km)
+    flat = np.linspace(0.9, 1.1, 16 * 16).reshape(16, 16)
+    result = gongsynth.simulate(seed=2, flat=flat, **small)
+    cfg = result.config
+    assert cfg.flat_file == "<array>" and len(cfg.flat_sha256) == 64
+    assert SimulationConfig.from_toml(cfg.to_toml()) == cfg
+    with pytest.raises(ValueError, match="user-supplied flat"):
+        gongsynth.simulate(config=cfg, progress=False)
+    with pytest.raises(ValueError, match="not the one"):
+        gongsynth.simulate(config=cfg, flat=flat * 1.01, progress=False)
+    again = gongsynth.simulate(config=cfg, flat=flat.copy(), progress=False)
+    assert np.array_equal(again.magnetogram.data, result.magnetogram.data, equal_nan=True)
+    # A flat given as a FITS file is found again by its path.
+    from astropy.io import fits
+    path = tmp_path / "flat.fits"
+    fits.writeto(path, flat)
+    from_file = gongsynth.simulate(seed=2, flat=path, **small)
+    assert from_file.config.flat_file == str(path)
+    assert np.array_equal(gongsynth.simulate(config=from_file.config, progress=False).magnetogram.data,
+                          from_file.magnetogram.data, equal_nan=True)
+
+
+def test_sweep_as_a_map_sequence():
+    small = dict(SMALL, detector_shape=16, photosphere_shape=(64, 64), photosphere_pixel_size=1536 * u.km)
+    del small["progress"]
+    sweep = gongsynth.simulate_many(latitudes=[0, 60] * u.deg, seed=4, progress=False, **small)
+    seq = sweep.map_sequence("magnetogram")
+    assert len(seq) == 2 and all(isinstance(m, GONGSynthMap) for m in seq)
+    with pytest.raises(ValueError, match="product"):
+        sweep.map_sequence("noise")

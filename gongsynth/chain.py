@@ -1,0 +1,328 @@
+"""
+The simulation as data: an ordered chain of named stages built from a run's configuration.
+
+`build_chain` turns a `~gongsynth.config.SimulationConfig` into a `Chain`: a list
+of `Stage` objects, each with a name, the quantities it reads and writes, and a
+function that computes them.  `gongsynth.simulate` runs the whole chain; a user
+(or a test) can run it up to any stage, look at what each stage made, or swap
+a stage for their own:
+
+>>> import astropy.units as u
+>>> from gongsynth.config import SimulationConfig
+>>> config = SimulationConfig(seed=1, detector_shape=16, resolutions=(1,), duration=1 * u.min,
+...                           photosphere_shape=(64, 64), photosphere_pixel_size=1536 * u.km)
+>>> chain = build_chain(config)
+>>> chain.names
+('photosphere', 'synthesis', 'channels', 'scene', 'optics', 'camera', 'reduction', 'maps')
+>>> state = chain.run(until="synthesis", progress=False)
+>>> state["stokes"].shape
+(64, 64, 51)
+
+Random streams are derived from the run's seed and the *stage name* only
+(`gongsynth.seeding.child_sequence`), so a stage draws the same numbers
+whatever ran before it, and a chain run in pieces gives the same bits as one
+run in one go.  The instrument's physical effects that can be switched off
+(PSF, seeing, flat, dark, photon noise, read noise, dither, truncation) are the
+config's ``effects`` (TOML ``[effects]``), passed to the stages that hold them.
+"""
+import time
+from dataclasses import dataclass
+
+import astropy.units as u
+import numpy as np
+from sunpy import log
+
+from gongsynth.geometry import Pointing
+from gongsynth.products.maps import PRODUCTS, make_product_map
+from gongsynth.seeding import child_sequence
+from gongsynth.stages import optics
+from gongsynth.stages.camera.integrate import integrate
+from gongsynth.stages.channels import channel_images
+from gongsynth.stages.reduction import reduce
+from gongsynth.stages.scene.fulldisk import full_disk_scene
+from gongsynth.stages.scene.tiled import tiled_scenes
+from gongsynth.sun.photosphere import model_photosphere, synthesize
+
+__all__ = ["Stage", "Chain", "build_chain", "run_header", "SKY_FRACTION"]
+
+#: A scene whose light is below this fraction of the brightest pixel is sky:
+#: its phases are noise, so the magnetogram and Dopplergram are blanked there.
+SKY_FRACTION = 1e-3
+
+
+@dataclass(frozen=True)
+class Stage:
+    """
+    One step of the simulation.
+
+    Parameters
+    ----------
+    name : str
+        The stage's name (also the name of its random stream).
+    inputs : tuple of str
+        Names of the quantities it reads from the chain's state.
+    outputs : tuple of str
+        Names of the quantities it adds to the state.
+    compute : callable
+        ``compute(**inputs) -> dict`` of the outputs.
+    description : str
+        One line for listings and progress messages.
+    """
+
+    name: str
+    inputs: tuple
+    outputs: tuple
+    compute: object
+    description: str = ""
+
+    def __call__(self, state):
+        """
+        Run the stage on ``state`` (a dict) and add its outputs to it.
+
+        Parameters
+        ----------
+        state : dict
+
+        Returns
+        -------
+        dict
+            The same ``state``, with this stage's outputs added.
+        """
+        missing = [name for name in self.inputs if name not in state]
+        if missing:
+            raise KeyError(f"stage {self.name!r} needs {missing}, which no earlier stage made")
+        made = self.compute(**{name: state[name] for name in self.inputs})
+        unexpected = set(made) ^ set(self.outputs)
+        if unexpected:
+            raise RuntimeError(f"stage {self.name!r} made {sorted(made)}, promised {list(self.outputs)}")
+        state.update(made)
+        return state
+
+
+class Chain(list):
+    """
+    An ordered list of `Stage` objects; `run` executes them in order.
+
+    Examples
+    --------
+    >>> chain = Chain([Stage("double", ("x",), ("y",), lambda x: {"y": 2 * x})])
+    >>> chain.run({"x": 3}, progress=False)["y"]
+    6
+    """
+
+    @property
+    def names(self):
+        """The stage names, in order."""
+        return tuple(stage.name for stage in self)
+
+    def __getitem__(self, key):
+        if isinstance(key, str):
+            for stage in self:
+                if stage.name == key:
+                    return stage
+            raise KeyError(f"no stage named {key!r}; the chain has {self.names}")
+        return super().__getitem__(key)
+
+    def run(self, state=None, *, until=None, progress=True, timings=None):
+        """
+        Run the stages in order.
+
+        Parameters
+        ----------
+        state : dict, optional
+            Quantities already known (e.g. a user's Stokes cube); default empty.
+        until : str, optional
+            Stop after this stage.
+        progress : bool
+            Show a progress bar over the stages.
+        timings : dict, optional
+            Filled with each stage's wall-clock seconds.
+
+        Returns
+        -------
+        dict
+            The state: every quantity any stage made.
+        """
+        from tqdm.auto import tqdm
+
+        state = {} if state is None else state
+        stop = len(self) if until is None else self.names.index(self[until].name) + 1
+        bar = tqdm(total=stop, disable=not progress, unit="stage", desc="gongsynth",
+                   bar_format="{desc:<28s}{bar}| {n_fmt}/{total_fmt} [{elapsed}]")
+        try:
+            for stage in self[:stop]:
+                bar.set_description_str(f"gongsynth: {stage.name}")
+                start = time.perf_counter()
+                stage(state)
+                seconds = time.perf_counter() - start
+                log.debug(f"gongsynth: stage {stage.name} took {seconds:.2f} s")
+                if timings is not None:
+                    timings[stage.name] = seconds
+                bar.update(1)
+        finally:
+            bar.close()
+        return state
+
+    def __repr__(self):
+        rows = [f"{i}. {s.name}: {', '.join(s.inputs) or '-'} -> {', '.join(s.outputs)}"
+                for i, s in enumerate(self, 1)]
+        return "Chain(\n  " + "\n  ".join(rows) + "\n)"
+
+
+def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False):
+    """
+    The stages of one run, in order, for ``config``.
+
+    Parameters
+    ----------
+    config : `~gongsynth.config.SimulationConfig`
+    stokes : `~gongsynth.StokesCube`, optional
+        Input spectra: replaces the built-in photosphere and its synthesis
+        (tiled mode only; their μ must match the latitude).
+    flat, dark : optional
+        Detector flat and dark (see `gongsynth.stages.camera.integrate.integrate`);
+        default the instrument's synthetic ones.
+    progress : bool
+        Progress bars inside long stages.
+
+    Returns
+    -------
+    `Chain`
+    """
+    inst = config.instrument
+    pointing = Pointing(config.latitude, config.obstime)
+    stages = Chain()
+
+    if stokes is None:
+        def photosphere():
+            return {"photosphere": model_photosphere(
+                shape=config.photosphere_shape, pixel_size=config.photosphere_pixel_size,
+                seed=child_sequence(config.seed, "photosphere"), **config.photosphere)}
+
+        stages.append(Stage("photosphere", (), ("photosphere",), photosphere,
+                            "the built-in model photosphere (seeded)"))
+    elif config.mode == "full-disk":
+        raise ValueError("mode='full-disk' synthesises the built-in photosphere at every point's own "
+                         "viewing angle; it does not take a stokes cube")
+
+    if config.mode == "full-disk":
+        def disk_scene(photosphere):
+            light, truth = full_disk_scene(photosphere, detector_shape=config.detector_pixels,
+                                           obstime=config.obstime, instrument=inst, progress=progress)
+            return {"light": light, "truth_scene": truth}
+
+        stages.append(Stage("scene", ("photosphere",), ("light", "truth_scene"), disk_scene,
+                            "synthesis at every point's own mu, mapped over the disk"))
+    else:
+        if stokes is None:
+            def synthesis(photosphere):
+                return {"stokes": synthesize(photosphere, mu=pointing.mu,
+                                             los_azimuth=pointing.los_azimuth, instrument=inst)}
+
+            stages.append(Stage("synthesis", ("photosphere",), ("stokes",), synthesis,
+                                "Milne-Eddington Stokes spectra at the pointing's mu"))
+        else:
+            pointing.check_mu(stokes.mu)
+
+            def given():
+                return {"stokes": stokes}
+
+            stages.append(Stage("input", (), ("stokes",), given, "the user's Stokes cube"))
+
+        def channels(stokes):
+            return {"channels": channel_images(stokes, instrument=inst)}
+
+        def scene(channels, stokes):
+            light, truth = tiled_scenes(channels, stokes.blos, stokes.pixel_size, pointing=pointing,
+                                        detector_shape=config.detector_pixels,
+                                        resolutions=config.resolutions, instrument=inst)
+            return {"light": light, "truth_scene": truth}
+
+        stages.append(Stage("channels", ("stokes",), ("channels",), channels,
+                            "Mueller matrix and filter weights: spectra -> six planes"))
+        stages.append(Stage("scene", ("channels", "stokes"), ("light", "truth_scene"), scene,
+                            "the planes tiled on the sky at the pointing"))
+
+    def optics_stage(light, truth_scene):
+        counts = optics.expected_counts(light, inst, workers=config.workers)
+        truth = truth_psf = None
+        if truth_scene is not None:
+            truth = optics.observe(truth_scene.data, truth_scene.pixel_scale, instrument=inst,
+                                   psf=False, boundary=truth_scene.boundary)
+            truth_psf = optics.observe(truth_scene.data, truth_scene.pixel_scale, instrument=inst,
+                                       boundary=truth_scene.boundary, workers=config.workers)
+        return {"expected_counts": counts, "truth": truth, "truth_psf": truth_psf}
+
+    def camera(expected_counts):
+        return {"raw": integrate(expected_counts, duration=config.duration, engine=config.engine,
+                                 seed=child_sequence(config.seed, "camera"), instrument=inst,
+                                 flat=flat, dark=dark, workers=config.workers, progress=progress)}
+
+    def reduction(raw, expected_counts):
+        # Where no sunlight falls (beyond the limb) the phases are noise: the maps
+        # stage blanks them as real full-disk magnetograms do.
+        light_total = expected_counts.sum(axis=0).value
+        return {"observables": reduce(raw, inst), "sky": light_total < SKY_FRACTION * light_total.max()}
+
+    def maps(observables, sky, truth, truth_psf, light):
+        made = {"magnetogram": observables.magnetogram, "doppler": observables.doppler,
+                "continuum": observables.continuum, "truth": truth, "truth_psf": truth_psf}
+        header = run_header(config)
+        products = {}
+        for product, image in made.items():
+            if image is not None and product != "continuum":  # the continuum keeps its sky values
+                image = _blank(image, sky)
+            products[f"{product}_map"] = None if image is None else make_product_map(
+                image, centre=light.centre, scale=inst.plate_scale, product=product, instrument=inst,
+                obstime=config.obstime, duration=config.duration, extra=header)
+        return products
+
+    stages.append(Stage("optics", ("light", "truth_scene"), ("expected_counts", "truth", "truth_psf"),
+                        optics_stage, "PSF (aperture and seeing), resampling and binning to pixels"))
+    stages.append(Stage("camera", ("expected_counts",), ("raw",), camera,
+                        "frames, flat, dark, photon and read noise, dither, truncation"))
+    stages.append(Stage("reduction", ("raw", "expected_counts"), ("observables", "sky"), reduction,
+                        "dark, flat, three-phase Doppler, B_LOS, pseudo-continuum"))
+    stages.append(Stage("maps", ("observables", "sky", "truth", "truth_psf", "light"),
+                        tuple(f"{p}_map" for p in PRODUCTS), maps,
+                        "sunpy Maps with helioprojective WCS; sky blanked"))
+    return stages
+
+
+def run_header(config):
+    """
+    FITS cards recording the run in every product (the instrument goes in the saved config).
+
+    Parameters
+    ----------
+    config : `~gongsynth.config.SimulationConfig`
+
+    Returns
+    -------
+    dict
+        Card name to ``(value, comment)``.
+    """
+    inst = config.instrument
+    cards = {
+        "simdur": (config.duration.to_value(u.s), "[s] observation length"),
+        "engine": (config.engine, "camera engine"),
+        "simmode": (config.mode, "scene mode"),
+        "seed": (str(config.seed), "root random seed"),
+        "seeing": (inst.seeing_fwhm.to_value(u.arcsec), "[arcsec] seeing FWHM"),
+        "aeff": (inst.effective_area.to_value(u.cm**2), "[cm2] effective area"),
+        "gain": (inst.gain.to_value(u.electron / u.adu), "[e/ADU] gain"),
+        "rdnoise": (inst.read_noise.to_value(u.adu), "[ADU] read noise"),
+        "landeg": (inst.lande_g.to_value(u.one), "Lande factor used in the inversion"),
+        "v0": (inst.v0.to_value(u.m / u.s / u.rad), "[m/s/rad] Michelson velocity scale"),
+    }
+    if config.mode == "tiled":  # a full-disk scene has no single field-centre latitude
+        cards = {"simlat": (config.latitude.to_value(u.deg), "[deg] field-centre latitude"), **cards}
+    return cards
+
+
+def _blank(image, sky):
+    """``image`` (a Quantity, or None) with NaN where ``sky`` is True."""
+    if image is None:
+        return None
+    image = u.Quantity(image)
+    return np.where(sky, np.nan, image.value) * image.unit
