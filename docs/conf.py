@@ -44,6 +44,7 @@ extensions = [
     "sphinx_gallery.gen_gallery",
     "gongsynth_params",
     "gongsynth_config",
+    "gongsynth_layout",
     "sphinxarg.ext",
     "gongsynth_validation",
 ]

@@ -25,6 +25,7 @@ run in one go.  The instrument's physical effects that can be switched off
 (PSF, seeing, flat, dark, photon noise, read noise, dither, truncation) are the
 config's ``effects`` (TOML ``[effects]``), passed to the stages that hold them.
 """
+import sys
 import time
 from dataclasses import dataclass
 
@@ -32,7 +33,7 @@ import astropy.units as u
 import numpy as np
 from sunpy import log
 
-from gongsynth.geometry import Pointing
+from gongsynth.geometry import Pointing, disk_geometry
 from gongsynth.products.maps import PRODUCTS, make_product_map
 from gongsynth.seeding import child_sequence
 from gongsynth.stages import optics
@@ -43,10 +44,10 @@ from gongsynth.stages.scene.fulldisk import full_disk_scene
 from gongsynth.stages.scene.tiled import tiled_scenes
 from gongsynth.sun.photosphere import model_photosphere, synthesize
 
-__all__ = ["Stage", "Chain", "build_chain", "run_header", "SKY_FRACTION"]
+__all__ = ["Stage", "Chain", "build_chain", "interactive", "run_header", "unmeasured", "SKY_FRACTION"]
 
-#: A scene whose light is below this fraction of the brightest pixel is sky:
-#: its phases are noise, so the magnetogram and Dopplergram are blanked there.
+#: A pixel whose light is below this fraction of the brightest pixel's is too
+#: faint for a phase: every product is blanked there (see `unmeasured`).
 SKY_FRACTION = 1e-3
 
 
@@ -147,11 +148,14 @@ class Chain(list):
 
         state = {} if state is None else state
         stop = len(self) if until is None else self.names.index(self[until].name) + 1
-        bar = tqdm(total=stop, disable=not progress, unit="stage", desc="gongsynth",
+        # A bar on a terminal; plain one-line messages where the output is a log file.
+        bar = tqdm(total=stop, disable=not (progress and interactive()), unit="stage", desc="gongsynth",
                    bar_format="{desc:<28s}{bar}| {n_fmt}/{total_fmt} [{elapsed}]")
         try:
-            for stage in self[:stop]:
+            for number, stage in enumerate(self[:stop], 1):
                 bar.set_description_str(f"gongsynth: {stage.name}")
+                if progress and bar.disable:
+                    log.info(f"gongsynth: stage {number}/{stop} {stage.name}: {stage.description}")
                 start = time.perf_counter()
                 stage(state)
                 seconds = time.perf_counter() - start
@@ -169,6 +173,17 @@ class Chain(list):
         return "Chain(\n  " + "\n  ".join(rows) + "\n)"
 
 
+def interactive():
+    """
+    Whether progress bars can be drawn: standard error is a terminal.
+
+    Returns
+    -------
+    bool
+    """
+    return sys.stderr.isatty()
+
+
 def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False):
     """
     The stages of one run, in order, for ``config``.
@@ -183,12 +198,13 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False):
         Detector flat and dark (see `gongsynth.stages.camera.integrate.integrate`);
         default the instrument's synthetic ones.
     progress : bool
-        Progress bars inside long stages.
+        Progress bars inside long stages (only drawn on a terminal).
 
     Returns
     -------
     `Chain`
     """
+    progress = progress and interactive()
     inst = config.instrument
     pointing = Pointing(config.latitude, config.obstime)
     stages = Chain()
@@ -259,10 +275,7 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False):
                                  flat=flat, dark=dark, workers=config.workers, progress=progress)}
 
     def reduction(raw, expected_counts):
-        # Where no sunlight falls (beyond the limb) the phases are noise: the maps
-        # stage blanks them as real full-disk magnetograms do.
-        light_total = expected_counts.sum(axis=0).value
-        return {"observables": reduce(raw, inst), "sky": light_total < SKY_FRACTION * light_total.max()}
+        return {"observables": reduce(raw, inst), "sky": unmeasured(expected_counts, config)}
 
     def maps(observables, sky, truth, truth_psf, light):
         made = {"magnetogram": observables.magnetogram, "doppler": observables.doppler,
@@ -270,11 +283,11 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False):
         header = run_header(config)
         products = {}
         for product, image in made.items():
-            if image is not None and product != "continuum":  # the continuum keeps its sky values
+            if image is not None:
                 image = _blank(image, sky)
             products[f"{product}_map"] = None if image is None else make_product_map(
                 image, centre=light.centre, scale=inst.plate_scale, product=product, instrument=inst,
-                obstime=config.obstime, duration=config.duration, extra=header)
+                duration=config.duration, extra=header)
         return products
 
     stages.append(Stage("optics", ("light", "truth_scene"), ("expected_counts", "truth", "truth_psf"),
@@ -287,6 +300,41 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False):
                         tuple(f"{p}_map" for p in PRODUCTS), maps,
                         "sunpy Maps with helioprojective WCS; sky blanked"))
     return stages
+
+
+def unmeasured(expected_counts, config):
+    """
+    Detector pixels where the line is not measured, to be blanked in every product.
+
+    Two rules, documented in the guide's reduction page:
+
+    - full-disk runs: every pixel whose centre's line of sight misses the Sun
+      (beyond the limb).  Light scattered there by the PSF gives phases, but
+      they measure the sky's scattered light, not a line at that place: a
+      halo of several hundred G of noise out to 1.05 R☉ otherwise;
+    - any run: pixels whose light is below `SKY_FRACTION` of the brightest
+      pixel's, too faint for a meaningful phase.
+
+    A tiled field is a flat tile placed at one latitude (the paper's
+    convention), so its pixels are not tested against the limb.
+
+    Parameters
+    ----------
+    expected_counts : `~astropy.units.Quantity`
+        (6, ny, nx) expected electrons per frame.
+    config : `~gongsynth.config.SimulationConfig`
+
+    Returns
+    -------
+    `numpy.ndarray` of bool
+        (ny, nx), True where the products are blanked.
+    """
+    light = expected_counts.sum(axis=0).value
+    faint = light < SKY_FRACTION * light.max()
+    if config.mode != "full-disk":
+        return faint
+    off_disk = ~disk_geometry(light.shape, config.instrument.plate_scale, obstime=config.obstime).on_disk
+    return faint | off_disk
 
 
 def run_header(config):

@@ -11,23 +11,46 @@ The ``gongsynth`` command line.
     gongsynth config --print-defaults
 
 Exit codes: 0 success, 1 runtime failure, 2 bad usage or bad input (the
-message names the argument), 3 refusing to overwrite existing output.
+message names the argument), 3 refusing to overwrite existing output, 4 the
+run cannot be done on this machine (more memory than is available),
+130 interrupted.
 """
 import argparse
 import dataclasses
+import math
+import os
 import sys
 from pathlib import Path
 
 import astropy.units as u
-
 from sunpy import log
 
 from gongsynth.config import ENGINES, MODES, Effects
+from gongsynth.resources import CannotRunHereError
 from gongsynth.version import version as __version__
 
 __all__ = ["main", "build_parser"]
 
-EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_EXISTS = 0, 1, 2, 3
+EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_EXISTS, EXIT_CANNOT_RUN, EXIT_INTERRUPTED = 0, 1, 2, 3, 4, 130
+
+
+def _number(kind, *, minimum=None, positive=False):
+    """An argparse type: a finite number of ``kind`` (and >= minimum / > 0), so the message names the flag."""
+    def convert(text):
+        try:
+            value = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(
+                f"{text!r} is not a{'n integer' if kind is int else ' number'}") from None
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError(f"{text!r} is not finite")
+        if positive and value <= 0:
+            raise argparse.ArgumentTypeError(f"must be positive, got {text}")
+        if minimum is not None and value < minimum:
+            raise argparse.ArgumentTypeError(f"must be at least {minimum}, got {text}")
+        return value
+    convert.__name__ = kind.__name__
+    return convert
 
 
 def build_parser():
@@ -51,17 +74,20 @@ def build_parser():
 
     sim = sub.add_parser("simulate", help="run the simulator and save maps and raw planes")
     sim.add_argument("--config", type=Path, help="TOML run configuration (see 'gongsynth config')")
-    sim.add_argument("--latitude", type=float, nargs="+", metavar="DEG",
+    sim.add_argument("--latitude", type=_number(float), nargs="+", metavar="DEG",
                      help="heliographic latitude(s) in degrees; several run a sweep "
                           "(e.g. --latitude 0 25 45 60 70 75)")
-    sim.add_argument("--duration", type=float, metavar="MIN", help="observation length in minutes")
+    sim.add_argument("--duration", type=_number(float, positive=True), metavar="MIN",
+                     help="observation length in minutes (a whole number of 1/60 s frames)")
     sim.add_argument("--engine", choices=ENGINES, help="camera engine")
     sim.add_argument("--mode", choices=MODES, help="scene mode")
     sim.add_argument("--obstime", metavar="ISO", help="observation time, e.g. 2009-09-05T18:54 "
                                                       "(sets B0, the observer and the map dates)")
-    sim.add_argument("--seed", type=int, help="root random seed (default: fresh, recorded)")
-    sim.add_argument("--shape", type=int, metavar="N", help="detector side in pixels (default 860)")
-    sim.add_argument("--workers", type=int, metavar="N",
+    sim.add_argument("--seed", type=_number(int, minimum=0),
+                     help="root random seed (default: fresh, recorded)")
+    sim.add_argument("--shape", type=_number(int, minimum=8), metavar="N",
+                     help="detector side in pixels (default 860)")
+    sim.add_argument("--workers", type=_number(int, minimum=1), metavar="N",
                      help="parallel workers: threads for one run, Dask workers for a sweep")
     sim.add_argument("--out", type=Path, required=True, help="output directory")
     sim.add_argument("--overwrite", action="store_true", help="replace existing output files")
@@ -102,22 +128,27 @@ def _simulation_config(args):
         changes["detector_shape"] = args.shape
     if args.latitude and len(args.latitude) == 1:
         changes["latitude"] = args.latitude[0] * u.deg
-    if args.seed is None and not args.config:
-        changes["seed"] = SimulationConfig.from_arguments().seed
     return config.replace(**changes)
 
 
 def _run_simulate(args):
     from gongsynth.files import check_writable
-    from gongsynth.products.output import planned_files
     from gongsynth.pipeline import simulate, simulate_many
+    from gongsynth.products.output import planned_files
+    from gongsynth.resources import check_resources
 
     config = _simulation_config(args)
     progress = not args.quiet
     if args.latitude and len(args.latitude) > 1:
         latitudes = u.Quantity(args.latitude, u.deg)
         folders = [_sweep_folder(args.out, lat) for lat in latitudes]
+        if len(set(folders)) != len(folders):
+            raise ValueError(f"--latitude {' '.join(map(str, args.latitude))}: two runs of the sweep "
+                             f"would share an output folder; give distinct latitudes")
         # Refuse before hours of computing, not after.
+        for lat in latitudes:
+            check_resources(config.replace(latitude=lat))
+        _check_output_folder(args.out)
         check_writable([p for f in folders for p in planned_files(f)], args.overwrite)
         results = simulate_many(latitudes=latitudes, config=config, workers=args.workers,
                                 progress=progress)
@@ -125,6 +156,8 @@ def _run_simulate(args):
             result.save(folder, overwrite=args.overwrite)
             _say(args, f"latitude {result.config.latitude:.1f}: wrote {folder}")
     else:
+        check_resources(config)
+        _check_output_folder(args.out)
         check_writable(planned_files(args.out), args.overwrite)
         result = simulate(config=config, progress=progress)
         paths = result.save(args.out, overwrite=args.overwrite)
@@ -135,7 +168,19 @@ def _run_simulate(args):
 
 
 def _sweep_folder(out, latitude):
-    return out / f"lat{latitude.to_value(u.deg):+05.1f}"
+    """A run's folder in a sweep: the latitude to 0.001 deg, so distinct runs get distinct folders."""
+    return out / f"lat{latitude.to_value(u.deg):+08.3f}"
+
+
+def _check_output_folder(out):
+    """Refuse, before computing, an output path that is a file or a folder we cannot write in."""
+    if out.exists() and not out.is_dir():
+        raise NotADirectoryError(f"--out {out} is a file, not a folder")
+    existing = out
+    while not existing.exists():
+        existing = existing.parent
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise PermissionError(f"--out {out}: cannot write in {existing}")
 
 
 def _run_compare(args):
@@ -180,23 +225,33 @@ def main(argv=None):
         if args.command == "config":
             from gongsynth.config import SimulationConfig
 
-            print(SimulationConfig().to_toml(), end="")
+            print(SimulationConfig().to_toml(template=True), end="")
             return EXIT_OK
         if args.command == "simulate":
             return _run_simulate(args)
         return _run_compare(args)
     except FileExistsError as exc:
-        print(f"gongsynth: {exc}", file=sys.stderr)
-        return EXIT_EXISTS
+        return _fail(f"{exc}", EXIT_EXISTS)
     except FileNotFoundError as exc:
-        print(f"gongsynth: file not found: {exc.filename or exc}", file=sys.stderr)
-        return EXIT_USAGE
+        return _fail(f"file not found: {exc.filename or exc}", EXIT_USAGE)
+    except (IsADirectoryError, NotADirectoryError, PermissionError) as exc:
+        return _fail(f"error: {exc}", EXIT_USAGE)
     except (ValueError, TypeError, KeyError, u.UnitsError) as exc:
-        print(f"gongsynth: error: {exc}", file=sys.stderr)
-        return EXIT_USAGE
+        # A KeyError's str() is the repr of its message: print the message itself.
+        message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
+        return _fail(f"error: {message}", EXIT_USAGE)
+    except (CannotRunHereError, MemoryError) as exc:
+        return _fail(f"cannot run here: {exc or 'out of memory'}", EXIT_CANNOT_RUN)
     except KeyboardInterrupt:
-        print("gongsynth: interrupted; no partial files were left behind", file=sys.stderr)
-        return 130
+        return _fail("interrupted", EXIT_INTERRUPTED)
+
+
+def _fail(message, code):
+    """Print an error on a line of its own (after any progress bar) and return the exit code."""
+    if sys.stderr.isatty():
+        print(file=sys.stderr)
+    print(f"gongsynth: {message}", file=sys.stderr)
+    return code
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -11,6 +11,7 @@ that name the key.
 import dataclasses
 import hashlib
 import inspect
+import numbers
 import tomllib
 from dataclasses import dataclass, field, fields
 from pathlib import Path
@@ -25,6 +26,7 @@ from gongsynth.geometry import Pointing
 from gongsynth.instrument import GONGInstrument
 from gongsynth.seeding import root_seed
 from gongsynth.stages.camera.integrate import ENGINES
+from gongsynth.stages.camera.schedule import n_frames_in
 from gongsynth.sun.photosphere import model_photosphere
 from gongsynth.tomlfmt import toml_table
 
@@ -49,7 +51,7 @@ _QUANTITIES = {
 _DOCS = {
     "engine": "camera engine: 'blocks' (fast, statistically exact) or 'frames' (frame by frame)",
     "mode": "'tiled' (the paper's tiling at several resolutions) or 'full-disk'",
-    "seed": "root random seed (int); recorded so a run can be repeated bit for bit",
+    "seed": "root random seed (int); unset: fresh entropy each run, recorded in the run's config.toml",
     "detector_shape": "detector side in pixels (GONG: 860; smaller for quick runs)",
     "resolutions": "tiled mode: magnification of the tile in each quadrant (1 = GONG resolution)",
     "obstime": "observation time (ISO); sets the observer position and the map dates",
@@ -139,7 +141,8 @@ class Effects:
 
 def photosphere_defaults():
     """
-    The knobs of `~gongsynth.sun.photosphere.model_photosphere` that ``[photosphere]`` sets, with their defaults.
+    The knobs of `~gongsynth.sun.photosphere.model_photosphere` that ``[photosphere]`` sets,
+    with their defaults.
 
     Shape, pixel size and seed are run arguments (``photosphere_shape``,
     ``photosphere_pixel_size``, ``seed``) and are not among them.
@@ -175,6 +178,11 @@ def _photosphere_knobs(values, where="photosphere"):
             raise TypeError(f"[{where}] {name} must be a number, got {value!r}")
         knobs[name] = value
     return knobs
+
+
+def _is_int(value):
+    """An integer (Python or numpy), not a bool."""
+    return isinstance(value, numbers.Integral) and not isinstance(value, bool)
 
 
 def fingerprint(data):
@@ -224,8 +232,9 @@ class SimulationConfig:
         ``"blocks"`` or ``"frames"``.
     mode : str
         ``"tiled"`` or ``"full-disk"``.
-    seed : int
-        Root seed.  `from_arguments` turns ``None`` into fresh recorded entropy.
+    seed : int or None
+        Root seed; ``None`` (the default) draws fresh entropy, reduced to an
+        int that the config then holds, so the run can be repeated.
     detector_shape : int or None
         Detector side in pixels; ``None`` uses the instrument's (860).
     resolutions : tuple of int
@@ -254,6 +263,8 @@ class SimulationConfig:
     Examples
     --------
     >>> cfg = SimulationConfig(seed=3)
+    >>> SimulationConfig().seed != SimulationConfig().seed   # fresh entropy when no seed is given
+    True
     >>> SimulationConfig.from_toml(cfg.to_toml()) == cfg
     True
     """
@@ -262,7 +273,7 @@ class SimulationConfig:
     duration: u.Quantity = 10 * u.min
     engine: str = "blocks"
     mode: str = "tiled"
-    seed: int = 0
+    seed: int | None = None
     detector_shape: int | None = None
     resolutions: tuple = (1, 2, 4, 8)
     obstime: str = DEFAULT_OBSTIME
@@ -282,29 +293,33 @@ class SimulationConfig:
             value = getattr(self, name)
             if not isinstance(value, u.Quantity) or not value.unit.is_equivalent(unit):
                 raise u.UnitsError(f"{name} must be a Quantity convertible to {unit}, got {value!r}")
-        if self.duration <= 0 * u.s:
-            raise ValueError(f"duration must be positive, got {self.duration}")
+        n_frames_in(self.duration, self.instrument)  # finite, positive, a whole number of frames
         if self.engine not in ENGINES:
             raise ValueError(f"engine must be one of {ENGINES}, got {self.engine!r}")
         if self.mode not in MODES:
             raise ValueError(f"mode must be one of {MODES}, got {self.mode!r}")
-        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
+        if self.seed is None:
+            object.__setattr__(self, "seed", root_seed(None))
+        if not _is_int(self.seed) or self.seed < 0:
             raise TypeError(f"seed must be a non-negative int, got {self.seed!r}")
-        if self.detector_shape is not None and (not isinstance(self.detector_shape, int)
-                                                or self.detector_shape < 8):
-            raise ValueError(f"detector_shape must be an int >= 8 or None, got {self.detector_shape!r}")
+        object.__setattr__(self, "seed", int(self.seed))
+        if self.detector_shape is not None:
+            if not _is_int(self.detector_shape) or self.detector_shape < 8:
+                raise ValueError(f"detector_shape must be an int >= 8 or None, got {self.detector_shape!r}")
+            object.__setattr__(self, "detector_shape", int(self.detector_shape))
         resolutions = tuple(self.resolutions)
-        if not resolutions or len(resolutions) > 4 or any(
-                not isinstance(r, int) or r < 1 for r in resolutions):
+        if not resolutions or len(resolutions) > 4 or any(not _is_int(r) or r < 1 for r in resolutions):
             raise ValueError(f"resolutions must be 1 to 4 positive ints, got {self.resolutions!r}")
-        object.__setattr__(self, "resolutions", resolutions)
+        object.__setattr__(self, "resolutions", tuple(int(r) for r in resolutions))
         shape = tuple(self.photosphere_shape)
-        if len(shape) != 2 or any(not isinstance(n, int) or n < 4 for n in shape):
+        if len(shape) != 2 or any(not _is_int(n) or n < 4 for n in shape):
             raise ValueError(f"photosphere_shape must be two ints >= 4, got {self.photosphere_shape!r}")
-        object.__setattr__(self, "photosphere_shape", shape)
+        object.__setattr__(self, "photosphere_shape", tuple(int(n) for n in shape))
         Pointing(self.latitude, self.obstime)  # checks the latitude and the time, once, in one place
-        if self.workers is not None and (not isinstance(self.workers, int) or self.workers < 1):
-            raise ValueError(f"workers must be a positive int or None, got {self.workers!r}")
+        if self.workers is not None:
+            if not _is_int(self.workers) or self.workers < 1:
+                raise ValueError(f"workers must be a positive int or None, got {self.workers!r}")
+            object.__setattr__(self, "workers", int(self.workers))
         if not isinstance(self.instrument, GONGInstrument):
             raise TypeError(f"instrument must be a GONGInstrument, got {type(self.instrument).__name__}")
         if not isinstance(self.effects, Effects):
@@ -371,7 +386,7 @@ class SimulationConfig:
         return {f.name: getattr(self, f.name) for f in fields(self)
                 if f.name not in ("instrument", "effects", "photosphere")}
 
-    def to_toml(self, *, comments=True):
+    def to_toml(self, *, comments=True, template=False):
         """
         The configuration as TOML: ``[simulation]``, ``[effects]``, ``[photosphere]`` and ``[instrument]``.
 
@@ -379,6 +394,9 @@ class SimulationConfig:
         ----------
         comments : bool
             Precede each key with a comment explaining it.
+        template : bool
+            Leave the seed unset (a run from the file then draws a fresh one and
+            records it): for ``gongsynth config --print-defaults``.
 
         Returns
         -------
@@ -386,9 +404,12 @@ class SimulationConfig:
         """
         doc = tomlkit.document()
         doc.add(tomlkit.comment("gongsynth run configuration"))
+        simulation = self.simulation_arguments()
+        if template:
+            simulation["seed"] = None
         doc.add("simulation", toml_table(
             [(name, value, _QUANTITIES[name][1] if name in _QUANTITIES else _DOCS.get(name, ""))
-             for name, value in self.simulation_arguments().items()], comments=comments))
+             for name, value in simulation.items()], comments=comments))
         doc.add("effects", toml_table(
             [(name, value, "") for name, value in dataclasses.asdict(self.effects).items()],
             comments=comments))
@@ -415,12 +436,13 @@ class SimulationConfig:
         KeyError
             For unknown tables or keys (the message names them).
         """
-        if isinstance(source, Path) or (isinstance(source, str) and "\n" not in source
-                                        and source.endswith(".toml")):
-            text = Path(source).read_text()
-        else:
-            text = source
-        table = tomllib.loads(text)
+        path = _as_path(source)
+        text = source if path is None else _read_text(path)
+        try:
+            table = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as exc:
+            where = "the TOML text" if path is None else str(path)
+            raise ValueError(f"{where} is not valid TOML: {exc}") from exc
         return cls.from_dict(table)
 
     @classmethod
@@ -456,6 +478,27 @@ class SimulationConfig:
         return cls(instrument=GONGInstrument.from_dict(table.get("instrument", {})),
                    effects=Effects.from_dict(table.get("effects", {})),
                    photosphere=_photosphere_knobs(table.get("photosphere", {})), **sim)
+
+
+def _as_path(source):
+    """``source`` as a path, or None when it is TOML text (a string holding '=' or a newline)."""
+    if isinstance(source, Path):
+        return source
+    if not isinstance(source, str):
+        raise TypeError(f"source must be TOML text or a path, got {type(source).__name__}")
+    return None if ("=" in source or "\n" in source or source.lstrip().startswith("[")) else Path(source)
+
+
+def _read_text(path):
+    """The text of a configuration file, with errors that name it."""
+    if path.is_dir():
+        raise IsADirectoryError(f"the configuration {path} is a directory, not a TOML file")
+    try:
+        return path.read_text()
+    except FileNotFoundError:
+        raise FileNotFoundError(2, "no such configuration file", str(path)) from None
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"{path} is not a text (TOML) file: {exc}") from exc
 
 
 def _quantity(name, value, unit, where="simulation"):

@@ -4,7 +4,9 @@ Atomic, non-clobbering file output.
 Every file gongsynth writes goes to a temporary name in the destination
 directory and is renamed into place only once complete, so an interrupted
 write never leaves a half-written product; existing files are only replaced
-when the caller asks for it.
+when the caller asks for it.  The temporary name keeps the destination's
+suffix, so writers that choose the format from it (``GenericMap.save``,
+``Figure.savefig``, astropy's ``.gz`` compression) write what the final name says.
 """
 import os
 import tempfile
@@ -63,7 +65,8 @@ def atomic_path(path, *, overwrite=False):
     ------
     `pathlib.Path`
         Write the complete file here; it is renamed to ``path`` when the block
-        exits without an exception, and deleted otherwise.
+        exits without an exception, and deleted otherwise.  A hidden name in
+        the same folder, ``.NAME.XXXXXXXX.part.SUFFIX``, ending in the suffix of ``path``.
 
     Examples
     --------
@@ -73,11 +76,14 @@ def atomic_path(path, *, overwrite=False):
     ...     _ = tmp.write_text("done")
     >>> target.read_text()
     'done'
+    >>> with atomic_path(target.with_name("map.fits")) as tmp:
+    ...     tmp.name.startswith(".map.fits.") and tmp.name.endswith(".part.fits")
+    True
     """
     path = Path(path)
     check_writable([path], overwrite)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=f".part{path.suffix}", dir=path.parent)
     os.close(fd)
     tmp = Path(tmp)
     # mkstemp makes the file private (0600); give it the permissions of a normal new file.

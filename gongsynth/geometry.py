@@ -286,7 +286,8 @@ def viewing_geometry(latitude: u.deg, obstime=None):
 @u.quantity_input
 def field_centre(latitude: u.deg, obstime=None):
     """
-    Field centre and length scale of a region on the central meridian: ``(Pointing.centre, Pointing.km_per_arcsec)``.
+    Field centre and length scale of a region on the central meridian:
+    ``(Pointing.centre, Pointing.km_per_arcsec)``.
 
     Parameters
     ----------

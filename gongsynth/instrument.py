@@ -18,8 +18,9 @@ from pathlib import Path
 
 import astropy.constants as const
 import astropy.units as u
+import tomlkit
 
-from gongsynth.tomlfmt import toml_value
+from gongsynth.tomlfmt import toml_table
 
 __all__ = ["GONGInstrument", "PREFILTER_FORMS", "resolve_instrument"]
 
@@ -128,6 +129,48 @@ class GONGInstrument:
         10 pm (the solar Ni I line at disk centre, design §3.4).
     reference_line_depth : `~astropy.units.Quantity`, dimensionless
         Central depth of that line relative to the continuum, 0.6.
+    psf_radius : `~astropy.units.Quantity`, angle
+        Truncation radius of the PSF kernel, 100 arcsec: the Airy pattern
+        encloses 1 - 2/(π² ν_c r) ≈ 99 % of its energy within it
+        (`gongsynth.stages.psf.psf_kernel`).
+    detector_map_seed : int
+        Seed of the synthetic flat and dark, 20190601 (fixed, so that the
+        camera and the reduction see the same maps).
+    flat_tilt : `~astropy.units.Quantity`, dimensionless
+        Synthetic flat: peak-to-centre amplitude of the linear gradient, 0.03.
+    flat_vignetting : `~astropy.units.Quantity`, dimensionless
+        Synthetic flat: fractional darkening in the corners, 0.04.
+    flat_dust_density : `~astropy.units.Quantity`, 1 / Mpix
+        Synthetic flat: mean number of dust shadows per million pixels, 40
+        (≈ 30 on 860 × 860).
+    flat_dust_depth_min, flat_dust_depth_max : `~astropy.units.Quantity`, dimensionless
+        Synthetic flat: range of the dust shadows' central depths, 0.01 to 0.05
+        (drawn uniformly).
+    flat_dust_radius_min, flat_dust_radius_max : `~astropy.units.Quantity`, pix
+        Synthetic flat: range of the dust shadows' radii, 3 to 12 pixels
+        (drawn uniformly).
+    flat_prnu : `~astropy.units.Quantity`, dimensionless
+        Synthetic flat: RMS pixel response non-uniformity, 0.01.
+    dark_level : `~astropy.units.Quantity`, electron
+        Synthetic dark: typical dark current per frame, 30 e⁻ (≈ 0.9 ADU per
+        1/60 s frame; illustrative, not a measured GONG value).
+    dark_glow : `~astropy.units.Quantity`, dimensionless
+        Synthetic dark: amplifier-glow amplitude relative to ``dark_level`` in
+        the glowing corner, 0.2.
+    dark_glow_length : `~astropy.units.Quantity`, dimensionless
+        Synthetic dark: e-folding length of the glow in units of the detector
+        side, 0.25.
+    dark_hot_fraction : `~astropy.units.Quantity`, dimensionless
+        Synthetic dark: fraction of hot pixels, 0.001.
+    dark_hot_factor : `~astropy.units.Quantity`, dimensionless
+        Synthetic dark: dark current of a hot pixel in units of ``dark_level``, 10.
+    wrap_margin : `~astropy.units.Quantity`, angle
+        Reduction: a pixel is flagged as possibly wrapped when either
+        polarisation's phase lies within this of ±π, 0.3 rad (≈ 650 m/s,
+        ≈ 450 G; design §3.5).
+
+    The synthetic flat and dark are illustrative GONG-like maps (no real GONG
+    flat or dark is public): see `gongsynth.stages.camera.detector`.
 
     Examples
     --------
@@ -176,6 +219,27 @@ class GONGInstrument:
     quadrature_step: u.Quantity = _param(0.1, u.pm, "filter quadrature step")
     reference_line_fwhm: u.Quantity = _param(10.0, u.pm, "rest line FWHM for the zero point (design 3.4)")
     reference_line_depth: u.Quantity = _param(0.6, u.dimensionless_unscaled, "rest line depth (design 3.4)")
+    psf_radius: u.Quantity = _param(100.0, u.arcsec, "PSF kernel truncation radius (99 % of the energy)")
+    detector_map_seed: int = _plain(20190601, int, "seed of the synthetic flat and dark")
+    flat_tilt: u.Quantity = _param(0.03, u.dimensionless_unscaled, "synthetic flat: gradient amplitude")
+    flat_vignetting: u.Quantity = _param(0.04, u.dimensionless_unscaled,
+                                         "synthetic flat: darkening in the corners")
+    flat_dust_density: u.Quantity = _param(40.0, 1 / u.Mpix, "synthetic flat: dust shadows per Mpix")
+    flat_dust_depth_min: u.Quantity = _param(0.01, u.dimensionless_unscaled,
+                                             "synthetic flat: shallowest dust shadow")
+    flat_dust_depth_max: u.Quantity = _param(0.05, u.dimensionless_unscaled,
+                                             "synthetic flat: deepest dust shadow")
+    flat_dust_radius_min: u.Quantity = _param(3.0, u.pix, "synthetic flat: smallest dust shadow radius")
+    flat_dust_radius_max: u.Quantity = _param(12.0, u.pix, "synthetic flat: largest dust shadow radius")
+    flat_prnu: u.Quantity = _param(0.01, u.dimensionless_unscaled, "synthetic flat: RMS pixel response")
+    dark_level: u.Quantity = _param(30.0, u.electron, "synthetic dark: dark current per frame")
+    dark_glow: u.Quantity = _param(0.2, u.dimensionless_unscaled, "synthetic dark: amplifier glow amplitude")
+    dark_glow_length: u.Quantity = _param(0.25, u.dimensionless_unscaled,
+                                          "synthetic dark: glow e-folding length / detector side")
+    dark_hot_fraction: u.Quantity = _param(1e-3, u.dimensionless_unscaled, "synthetic dark: hot pixels")
+    dark_hot_factor: u.Quantity = _param(10.0, u.dimensionless_unscaled,
+                                         "synthetic dark: hot pixel current / dark_level")
+    wrap_margin: u.Quantity = _param(0.3, u.rad, "reduction: wrap flag margin from +-pi (design 3.5)")
 
     def __post_init__(self):
         for f in fields(self):
@@ -342,6 +406,23 @@ class GONGInstrument:
             kwargs[key] = value
         return cls(**kwargs)
 
+    def toml_table(self, *, comments=True):
+        """
+        The instrument as a tomlkit ``[instrument]`` table, each key under its documentation.
+
+        Parameters
+        ----------
+        comments : bool
+            Write the documentation comments.
+
+        Returns
+        -------
+        `tomlkit.items.Table`
+        """
+        values = self.to_dict()
+        return toml_table([(f.name, values[f.name], f.metadata[_DOC]) for f in fields(self)],
+                          comments=comments)
+
     def to_toml(self):
         """
         The instrument as a TOML ``[instrument]`` table, one commented line each.
@@ -350,12 +431,9 @@ class GONGInstrument:
         -------
         str
         """
-        lines = ["[instrument]"]
-        for f in fields(self):
-            value = self.to_dict()[f.name]
-            lines.append(f"# {f.metadata[_DOC]}")
-            lines.append(f"{f.name} = {toml_value(value)}")
-        return "\n".join(lines) + "\n"
+        doc = tomlkit.document()
+        doc.add("instrument", self.toml_table())
+        return tomlkit.dumps(doc)
 
     @classmethod
     def from_toml(cls, source):

@@ -17,6 +17,7 @@ import numpy as np
 from gongsynth.chain import build_chain
 from gongsynth.config import IN_MEMORY, Effects, SimulationConfig, fingerprint
 from gongsynth.optional import import_optional
+from gongsynth.resources import check_resources
 from gongsynth.version import version as __version__
 
 __all__ = ["SimulationResult", "Sweep", "simulate", "simulate_many"]
@@ -230,6 +231,7 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="bl
         raise TypeError(f"config must be a SimulationConfig, got {type(config).__name__}")
     elif _given(arguments):
         raise TypeError(f"pass either config or the run's arguments, not both: {sorted(_given(arguments))}")
+    check_resources(config)
     config, flat = _detector_map(config, "flat", flat)
     config, dark = _detector_map(config, "dark", dark)
     chain = build_chain(config, stokes=stokes, flat=flat, dark=dark, progress=progress)
@@ -331,12 +333,14 @@ def simulate_many(*, latitudes=(0, 25, 45, 60, 70, 75) * u.deg, seeds=None, conf
     if len(seeds) != latitudes.size:
         raise ValueError(f"seeds must have one entry per latitude ({latitudes.size}), got {len(seeds)}")
     configs = [config.replace(latitude=lat, seed=int(s)) for lat, s in zip(latitudes, seeds)]
+    check_resources(config)
 
     if client is None and (workers is None or workers <= 1):
         return Sweep(simulate(config=c, progress=False)
                      for c in tqdm(configs, disable=not progress, desc="sweep"))
     distributed = import_optional("dask.distributed", "dask")
-    Client, LocalCluster, as_completed = distributed.Client, distributed.LocalCluster, distributed.as_completed
+    Client, LocalCluster = distributed.Client, distributed.LocalCluster
+    as_completed = distributed.as_completed
 
     own = client is None
     if own:

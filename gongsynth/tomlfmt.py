@@ -40,7 +40,7 @@ def toml_plain(value):
 
 
 def toml_value(value):
-    """
+    r"""
     One value as TOML text.
 
     Parameters
@@ -55,13 +55,13 @@ def toml_value(value):
     --------
     >>> import astropy.units as u
     >>> toml_value(3.6 * u.arcsec), toml_value((1, 2)), toml_value('a "b"')
-    ('"3.6 arcsec"', '[1, 2]', '"a \\\\"b\\\\""')
+    ('"3.6 arcsec"', '[1, 2]', '"a \\"b\\""')
     """
     return tomlkit.item(toml_plain(value)).as_string()
 
 
 def toml_table(entries, *, comments=True):
-    """
+    r"""
     A tomlkit table from ``(key, value, comment)`` entries; ``value=None`` writes a commented example.
 
     Parameters
@@ -79,12 +79,12 @@ def toml_table(entries, *, comments=True):
     --------
     >>> import tomlkit
     >>> doc = tomlkit.document()
-    >>> doc.add("run", toml_table([("name", 'a\\nb', "a name")]))
-    {'run': {'name': 'a\\nb'}}
+    >>> doc.add("run", toml_table([("name", 'a\nb', "a name")]))
+    {'run': {'name': 'a\nb'}}
     >>> print(tomlkit.dumps(doc).strip())
     [run]
     # a name
-    name = "a\\nb"
+    name = "a\nb"
     """
     table = tomlkit.table()
     for key, value, comment in entries:

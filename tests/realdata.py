@@ -69,7 +69,7 @@ def gong_header():
 @functools.lru_cache(maxsize=1)
 def gong_rho():
     """Distance from disk centre in solar radii of every pixel of the GONG header's grid (read-only)."""
-    from gongsynth.analysis.statistics import disk_coordinates
+    from gongsynth.analysis.disk import disk_coordinates
 
     dummy = sunpy.data.test.get_dummy_map_from_header(
         sunpy.data.test.get_test_filepath("gong_magnetogram.header"))

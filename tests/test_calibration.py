@@ -2,8 +2,8 @@ import astropy.units as u
 import numpy as np
 import pytest
 
-from gongsynth.geometry import Pointing
 from gongsynth.analysis.calibration import calibration_curve, robust_slope
+from gongsynth.geometry import Pointing
 
 
 def test_robust_slope_ignores_outliers():
@@ -48,12 +48,12 @@ def test_curve_bad_input():
 @pytest.mark.parametrize("latitude", [0, 60] * u.deg)
 def test_noiseless_psf_free_factor_is_the_line_physics(latitude):
     """Without noise and PSF, GONG measures the pixel-averaged field up to the line's ~0.99."""
-    from gongsynth.stages.optics import expected_counts, observe
-    from gongsynth.sun.photosphere import model_photosphere, synthesize
+    from gongsynth.geometry import viewing_geometry
     from gongsynth.stages.channels import channel_images
+    from gongsynth.stages.optics import expected_counts, observe
     from gongsynth.stages.reduction import reduce
     from gongsynth.stages.scene.tiled import tiled_scenes
-    from gongsynth.geometry import viewing_geometry
+    from gongsynth.sun.photosphere import model_photosphere, synthesize
 
     photosphere = model_photosphere(shape=(256, 256), pixel_size=384 * u.km, seed=5)
     mu, los_azimuth = viewing_geometry(latitude)

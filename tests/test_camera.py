@@ -18,8 +18,8 @@ import pytest
 from astropy.io import fits
 
 from gongsynth import GONGInstrument
-from gongsynth.stages.camera.integrate import RawPlanes, integrate, snapshot_index
 from gongsynth.stages.camera.detector import synthetic_dark, synthetic_flat
+from gongsynth.stages.camera.integrate import RawPlanes, integrate, snapshot_index
 from gongsynth.stages.filters import channel_weights
 from gongsynth.stages.reduction import reduce
 
@@ -300,7 +300,7 @@ def test_planes_without_frames_hold_zero():
 def test_poisson_sampler_matches_the_poisson_distribution(lam, table_max):
     from scipy import stats
 
-    from gongsynth.stages.camera._kernels import poisson_kernel
+    from gongsynth.stages.camera.kernels import poisson_kernel
 
     n = 200_000
     x = poisson_kernel(np.full(n, lam), np.uint64(2024), np.uint64(7), np.uint64(int(lam * 10)),
@@ -318,7 +318,7 @@ def test_poisson_sampler_matches_the_poisson_distribution(lam, table_max):
 def test_normal_sampler_including_the_ziggurat_tail():
     from scipy import stats
 
-    from gongsynth.stages.camera._kernels import normal_kernel
+    from gongsynth.stages.camera.kernels import normal_kernel
 
     z = normal_kernel(1_000_000, np.uint64(99), np.uint64(1), np.uint64(5))
     assert stats.kstest(z, "norm").pvalue > 1e-3

@@ -19,8 +19,8 @@ from gongsynth.analysis.compare import (
     load_observation,
     noise_estimate,
 )
+from gongsynth.analysis.disk import disk_coordinates, local_pixel_scale
 from gongsynth.analysis.observations import BadHeaderWarning, ObservationKindError
-from gongsynth.analysis.statistics import disk_coordinates, local_pixel_scale
 
 from .realdata import gong_rho, real_file, write_gong_fits
 
@@ -393,8 +393,8 @@ def test_real_mdi_continuum_limb_darkening_survives_degradation():
 
 
 def test_gongsynth_product_file_compared_off_disk_centre(tmp_path):
-    from gongsynth.products import maps
     from gongsynth.geometry import field_centre
+    from gongsynth.products import maps
 
     rng = np.random.default_rng(12)
     # A 120 x 120 field (300") at 60 degrees latitude: no quiet box near disk centre lies on it.

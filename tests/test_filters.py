@@ -108,6 +108,7 @@ def test_continuum_padding_equals_wide_window():
 def test_narrow_integration_range_would_bias_the_field():
     """Design 3.8: integrating over +-0.05 nm instead of +-3 nm gives B about 30 % low."""
     from gongsynth.stages.reduction import reduce
+
     from .lines import zeeman_shift
     field = 1000 * u.G
     results = []

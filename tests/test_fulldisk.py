@@ -9,14 +9,13 @@ from astropy.time import Time
 from sunpy.coordinates import HeliographicStonyhurst, get_earth, sun
 
 from gongsynth import GONGInstrument
-from gongsynth.stages.scene import fulldisk
-from gongsynth.geometry import disk_geometry
-from gongsynth.stages.scene.fulldisk import full_disk_scene
-from gongsynth.stages.optics import expected_counts
-from gongsynth.sun.photosphere import Photosphere, synthesize
+from gongsynth.geometry import DEFAULT_OBSTIME, disk_geometry, wcs_header
 from gongsynth.stages.channels import channel_images
-from gongsynth.geometry import DEFAULT_OBSTIME, wcs_header
+from gongsynth.stages.optics import expected_counts
+from gongsynth.stages.scene import fulldisk
+from gongsynth.stages.scene.fulldisk import full_disk_scene
 from gongsynth.stages.scene.scene import radiance_at_earth
+from gongsynth.sun.photosphere import Photosphere, synthesize
 
 # A coarse instrument that sees the whole disk on a small detector (fast tests).
 COARSE = GONGInstrument(plate_scale=25 * u.arcsec)

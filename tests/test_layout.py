@@ -32,7 +32,7 @@ LAYERS = (
     ("gongsynth.stages.reduction",),
     ("gongsynth.products",),
     ("gongsynth.analysis",),
-    ("gongsynth.config", "gongsynth.chain", "gongsynth.pipeline"),
+    ("gongsynth.config", "gongsynth.chain", "gongsynth.resources", "gongsynth.pipeline"),
     ("gongsynth.cli",),
 )
 

@@ -5,8 +5,8 @@ import sunpy.map
 from astropy.io import fits
 from sunpy.coordinates import frames
 
-from gongsynth.products.maps import GONGSynthMap, make_product_map
 from gongsynth.geometry import field_centre
+from gongsynth.products.maps import GONGSynthMap, make_product_map
 
 
 def test_product_map_round_trips_through_sunpy(tmp_path):

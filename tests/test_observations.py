@@ -11,6 +11,7 @@ from astropy.io import fits
 from sunpy.coordinates import frames
 from sunpy.map.sources import GONGMagnetogramMap, HMIMap, MDIMap
 
+from gongsynth.analysis.disk import disk_coordinates
 from gongsynth.analysis.observations import (
     BadHeaderError,
     BadHeaderWarning,
@@ -18,7 +19,6 @@ from gongsynth.analysis.observations import (
     check_disk_footprint,
     load_observation,
 )
-from gongsynth.analysis.statistics import disk_coordinates
 
 from .realdata import gong_header, gong_rho, real_file, write_gong_fits
 
@@ -323,7 +323,7 @@ def test_real_gong_zqa_from_nso(tmp_path):
     m = load_observation(path)
     assert isinstance(m, GONGMagnetogramMap)
     assert m.data.shape == (860, 860) and m.unit == u.G
-    from gongsynth.analysis.statistics import noise_estimate
+    from gongsynth.analysis.noise import noise_estimate
 
     noise = noise_estimate(m)
     assert 0.5 * u.G < noise.sigma < 20 * u.G
@@ -334,7 +334,7 @@ def test_real_hmi_full_disk_continuum_rolled_180_degrees():
     import sunpy.data.test
 
     from gongsynth.analysis.compare import compare_limb_darkening, degrade_to_gong
-    from gongsynth.analysis.statistics import disk_centre_level
+    from gongsynth.analysis.noise import disk_centre_level
 
     path = sunpy.data.test.get_test_filepath("resampled_hmi.fits")
     with warnings.catch_warnings():

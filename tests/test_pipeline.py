@@ -8,7 +8,7 @@ from sunpy.coordinates import frames
 import gongsynth
 from gongsynth.analysis.calibration import calibration_curve, robust_slope
 from gongsynth.chain import build_chain
-from gongsynth.config import Effects, SimulationConfig
+from gongsynth.config import SimulationConfig
 from gongsynth.products.maps import GONGSynthMap
 
 # A 98 Mm tile like the paper's, coarsely sampled so the tests stay fast.

@@ -3,21 +3,20 @@ import astropy.units as u
 import numpy as np
 import pytest
 
-from gongsynth.geometry import Pointing
 from gongsynth import GONGInstrument
+from gongsynth.geometry import Pointing, viewing_geometry
 from gongsynth.stages import channels as polarimetry
-from gongsynth.stages.filters import channel_responses, channel_weights
-from gongsynth.stages.optics import observe
-from gongsynth.sun.photosphere import Photosphere, synthesize
 from gongsynth.stages.channels import (
     CHANNEL_UNIT,
     analyser_coefficients,
     channel_images,
     polarized_spectra,
 )
+from gongsynth.stages.filters import channel_responses, channel_weights
+from gongsynth.stages.optics import observe
 from gongsynth.stages.scene.scene import radiance_at_earth
 from gongsynth.stages.scene.tiled import tile, tiled_scenes
-from gongsynth.geometry import viewing_geometry
+from gongsynth.sun.photosphere import Photosphere, synthesize
 from gongsynth.sun.stokes import RADIANCE_UNIT, StokesCube
 
 LAM = np.linspace(676.73, 676.83, 51) * u.nm

@@ -66,7 +66,8 @@ def test_dark_and_flat_bookkeeping(shifted_planes):
     flat = rng.uniform(0.8, 1.2, (6, 4, 5))
     dark = rng.uniform(10, 20, (4, 5)) * u.electron
     frames = np.array([6000] * 6)
-    raw = planes * normalise_flat(flat, planes.shape[1:]) + frames[:, None, None] * (dark / GONG.gain).value / 8
+    dark_dn = (dark / GONG.gain).value / 8
+    raw = planes * normalise_flat(flat, planes.shape[1:]) + frames[:, None, None] * dark_dn
     obs = reduce(raw, GONG, dark=dark, flat=flat, frames_per_plane=frames)
     ref = reduce(clean)
     assert np.allclose(obs.magnetogram.value, ref.magnetogram.value, atol=1e-6)

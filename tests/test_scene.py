@@ -8,12 +8,11 @@ import sunpy.map
 from sunpy.coordinates import HeliographicStonyhurst, sun
 from sunpy.sun.constants import radius as R_SUN
 
-from gongsynth.geometry import Pointing
-from gongsynth.stages.scene import tiled as scene_mod
-from gongsynth.stages.optics import convolve, psf_kernel
-from gongsynth.geometry import DEFAULT_OBSTIME, field_centre, viewing_geometry
-from gongsynth.stages.scene.scene import EARTH_RADIANCE_UNIT, radiance_at_earth, sky_grid
+from gongsynth.geometry import DEFAULT_OBSTIME, Pointing, field_centre, viewing_geometry
 from gongsynth.stages.channels import channel_images
+from gongsynth.stages.optics import convolve, psf_kernel
+from gongsynth.stages.scene import tiled as scene_mod
+from gongsynth.stages.scene.scene import EARTH_RADIANCE_UNIT, radiance_at_earth, sky_grid
 from gongsynth.stages.scene.tiled import tile, tiled_scenes
 from gongsynth.sun.stokes import RADIANCE_UNIT, StokesCube
 

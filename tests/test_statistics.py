@@ -11,15 +11,13 @@ import sunpy.map
 from astropy.coordinates import SkyCoord
 from sunpy.coordinates import frames
 
+from gongsynth.analysis.disk import disk_coordinates, local_pixel_scale
+from gongsynth.analysis.limb import limb_darkening
+from gongsynth.analysis.noise import disk_centre_level, noise_estimate
 from gongsynth.analysis.observations import BadHeaderWarning, load_observation
 from gongsynth.analysis.statistics import (
     MAD_TO_SIGMA,
-    disk_centre_level,
-    disk_coordinates,
     field_histogram,
-    limb_darkening,
-    local_pixel_scale,
-    noise_estimate,
     pixel_difference_sigma,
     robust_sigma,
 )

@@ -148,7 +148,7 @@ def test_limb_darkening_and_continuum_level():
     mus = np.array([1.0, 0.8, 0.5, 0.3])
     ph = columns(np.zeros(4), continuum=1.0)
     ph_dark = columns(np.zeros(4), continuum=0.25)
-    for k, mu in enumerate(mus):
+    for mu in mus:
         c = synthesize(ph, mu=float(mu)).I.value[0, 0, 0]
         ld = np.polynomial.polynomial.polyval(mu, NECKEL_LABS_676)
         assert c == pytest.approx(3.0e14 * ld, rel=2e-3)    # 676.73 nm is 0.05 nm from the line core

@@ -209,7 +209,7 @@ def calibration_curve(measured, truth=None, *, mask=None, threshold: u.G = 100 *
 
     Parameters
     ----------
-    measured : `~gongsynth.pipeline.SimulationResult`, `~sunpy.map.GenericMap`, `~astropy.units.Quantity` or array
+    measured : `~gongsynth.pipeline.SimulationResult`, `~sunpy.map.GenericMap`, Quantity or array
         A simulation result (its magnetogram and truth are used, restricted
         to the GONG-resolution part of the field), or a measured map / array in G.
     truth : map, Quantity or array, optional

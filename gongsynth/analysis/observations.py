@@ -39,6 +39,8 @@ from astropy.io import fits
 from astropy.io.fits.verify import VerifyWarning
 from sunpy.coordinates import frames
 
+from gongsynth.analysis.disk import disk_coordinates
+
 __all__ = [
     "BadHeaderWarning",
     "BadHeaderError",
@@ -283,7 +285,7 @@ def check_disk_footprint(smap, *, name="map", rho=None):
         Name used in the warning (e.g. the file name).
     rho : `numpy.ndarray`, optional
         Distance of every pixel from disk centre in solar radii, if already
-        computed (`gongsynth.analysis.statistics.disk_coordinates`).
+        computed (`gongsynth.analysis.disk.disk_coordinates`).
 
     Returns
     -------
@@ -298,7 +300,7 @@ def check_disk_footprint(smap, *, name="map", rho=None):
     >>> import sunpy.map
     >>> from astropy.coordinates import SkyCoord
     >>> from sunpy.coordinates import frames
-    >>> from gongsynth.analysis.statistics import disk_coordinates
+    >>> from gongsynth.analysis.disk import disk_coordinates
     >>> ref = SkyCoord(0 * u.arcsec, 0 * u.arcsec, frame=frames.Helioprojective,
     ...                observer="earth", obstime="2020-01-01")
     >>> m = sunpy.map.Map(np.ones((100, 100)), sunpy.map.make_fitswcs_header(
@@ -307,8 +309,6 @@ def check_disk_footprint(smap, *, name="map", rho=None):
     >>> check_disk_footprint(sunpy.map.Map(np.where(rho < 1, 1.0, np.nan), m.meta))
     True
     """
-    from gongsynth.analysis.statistics import disk_coordinates
-
     finite = np.isfinite(np.asarray(smap.data, dtype=float))
     if finite.mean() > 0.95:
         return True
@@ -334,6 +334,13 @@ def check_disk_footprint(smap, *, name="map", rho=None):
     return True
 
 
+def _with_data(smap, data, meta):
+    """A map of the same sunpy source with new data and metadata, keeping ``smap``'s plot settings."""
+    new = sunpy.map.Map(data, meta)
+    new.plot_settings.update(smap.plot_settings)
+    return new
+
+
 def _mask_gong_sky(smap, header, step, rho):
     """NaN the GONG sky value (SKYVALUE) off the disk."""
     if "SKYVALUE" not in header:
@@ -346,7 +353,7 @@ def _mask_gong_sky(smap, header, step, rho):
     if not sky_pixels.any():
         return smap
     data[sky_pixels] = np.nan
-    return smap._new_instance(data, smap.meta, plot_settings=smap.plot_settings)
+    return _with_data(smap, data, smap.meta)
 
 
 def load_observation(path, *, kind="magnetogram", repair=True):
@@ -430,10 +437,8 @@ def load_observation(path, *, kind="magnetogram", repair=True):
         meta = smap.meta.copy()
         meta["bunit"] = "G"
         values = np.asarray(smap.data) * float(factor) if factor != 1 else smap.data
-        smap = smap._new_instance(values, meta, plot_settings=smap.plot_settings)
+        smap = _with_data(smap, values, meta)
     if isinstance(smap.coordinate_frame, frames.Helioprojective):
-        from gongsynth.analysis.statistics import disk_coordinates
-
         rho, _ = disk_coordinates(smap)
         if str(header.get("CTYPE1", "")).upper().startswith("GONG") or _is_gong_observation(header):
             smap = _mask_gong_sky(smap, header, step, rho)

@@ -24,10 +24,11 @@ PRODUCTS = {
     "doppler": ("DOPPLERGRAM", u.m / u.s),
     "continuum": ("PSEUDO-CONTINUUM", u.adu),
     "truth": ("TRUE B_LOS", u.G),
+    "truth_psf": ("TRUE B_LOS PSF", u.G),
 }
 
 #: Symmetric display range of each signed product.
-_DISPLAY_RANGE = {"MAGNETOGRAM": 150, "TRUE B_LOS": 150, "DOPPLERGRAM": 1500}
+_DISPLAY_RANGE = {"MAGNETOGRAM": 150, "TRUE B_LOS": 150, "TRUE B_LOS PSF": 150, "DOPPLERGRAM": 1500}
 
 
 def _product(product):
@@ -37,7 +38,7 @@ def _product(product):
     return PRODUCTS[product]
 
 
-def product_header(shape, *, centre, scale, product, instrument=None, extra=None):
+def product_header(shape, *, centre, scale, product, instrument=None, duration=None, extra=None):
     """
     FITS header of a gongsynth product map with a helioprojective WCS.
 
@@ -53,6 +54,11 @@ def product_header(shape, *, centre, scale, product, instrument=None, extra=None
         One of `PRODUCTS`.
     instrument : `~gongsynth.GONGInstrument`, optional
         Supplies the line wavelength (WAVELNTH).
+    duration : `~astropy.units.Quantity`, optional
+        Length of the integration that starts at ``centre.obstime``
+        (DATE-OBS): written as DATE-BEG, DATE-AVG, DATE-END and XPOSURE
+        (FITS standard 4.0 time keywords), so that sunpy's ``Map.date``
+        and ``Map.reference_date`` say when the magnetogram was taken.
     extra : dict, optional
         More header cards (≤ 8-character keys), e.g. run parameters; a value
         may be a ``(value, comment)`` pair.
@@ -78,6 +84,12 @@ def product_header(shape, *, centre, scale, product, instrument=None, extra=None
     header["dtype"] = "SIMULATED"
     header["content"] = content
     header["gsvers"] = __version__
+    if duration is not None:
+        start = centre.obstime
+        header["date-beg"] = start.isot
+        header["date-avg"] = (start + duration / 2).isot
+        header["date-end"] = (start + duration).isot
+        header["xposure"] = u.Quantity(duration).to_value(u.s)
     comments = dict(header.get("keycomments", {}))
     for key, value in (extra or {}).items():
         if isinstance(value, tuple):
@@ -87,7 +99,7 @@ def product_header(shape, *, centre, scale, product, instrument=None, extra=None
     return header
 
 
-def make_product_map(data, *, centre, scale, product, instrument=None, extra=None):
+def make_product_map(data, *, centre, scale, product, instrument=None, duration=None, extra=None):
     """
     A `GONGSynthMap` of one product.
 
@@ -95,7 +107,7 @@ def make_product_map(data, *, centre, scale, product, instrument=None, extra=Non
     ----------
     data : `~astropy.units.Quantity`
         Image (ny, nx) in units convertible to the product's (G, m/s or adu).
-    centre, scale, product, instrument, extra
+    centre, scale, product, instrument, duration, extra
         As for `product_header`.
 
     Returns
@@ -116,7 +128,7 @@ def make_product_map(data, *, centre, scale, product, instrument=None, extra=Non
     unit = _product(product)[1]
     values = u.Quantity(data).to_value(unit)
     header = product_header(values.shape, centre=centre, scale=scale, product=product,
-                            instrument=instrument, extra=extra)
+                            instrument=instrument, duration=duration, extra=extra)
     return GONGSynthMap(np.asarray(values, dtype=np.float32), header)
 
 

@@ -23,9 +23,9 @@ analyser; the effective area (0.6 cm², tuned to real GONG counts) absorbs it.
 import astropy.units as u
 import numpy as np
 
-from gongsynth.stages.filters import channel_weights
 from gongsynth.instrument import resolve_instrument
 from gongsynth.planes import N_CHANNELS, N_PLANES, N_POLARISATIONS
+from gongsynth.stages.filters import channel_weights
 from gongsynth.validation import check_finite
 
 __all__ = ["CHANNEL_UNIT", "IDEAL_MUELLER", "analyser_coefficients", "polarized_spectra",

@@ -1,25 +1,10 @@
 r"""
-Optics: point-spread function, FFT convolution, pixelization and expected counts.
+Optics: the PSF applied by FFT convolution, pixelization and expected counts.
 
-The PSF is the Airy pattern of the circular aperture D at the line wavelength
-λ0 convolved with Gaussian seeing (paper Sec. 3.2, design §3.9).  Both factors
-are known in Fourier space, so the radial profile is the Hankel transform of
-the product of their optical transfer functions,
-
-.. math::
-
-    \mathrm{PSF}(r) = 2\pi\int_0^{\nu_c} \mathrm{OTF}_\mathrm{Airy}(\nu)\,
-        e^{-2\pi^2\sigma^2\nu^2}\,J_0(2\pi\nu r)\,\nu\,d\nu, \qquad
-    \mathrm{OTF}_\mathrm{Airy}(\nu) = \tfrac{2}{\pi}\big[\arccos s - s\sqrt{1-s^2}\big],
-    \; s = \nu/\nu_c,
-
-with cut-off :math:`\nu_c = D/\lambda_0` (0.2006 cycles per arcsec for
-D = 2.8 cm).  The profile has unit integral over the plane and its first
-Airy zero lies at :math:`1.22\lambda_0/D \approx 6.08''`.  Because the PSF is
-band limited, point samples on any grid finer than :math:`\lambda_0/(2D)
-\approx 2.49''` represent it exactly; kernels are point samples normalised to
-unit sum (the Airy wings, ∝ r⁻³, put about 1 % of the energy beyond 100″:
-the default kernel is truncated there).
+The PSF itself (Airy ⊗ seeing, paper Sec. 3.2, design §3.9) is modelled in
+`gongsynth.stages.psf`; `psf_profile`, `psf_kernel` and `normalize_kernel`
+are importable from here too.  Both effects can be switched off: ``psf=False``
+(no PSF at all, pixel averages only) and ``seeing=False`` (diffraction only).
 
 Pixelization follows the paper: bilinear resampling to exactly
 ``supersampling`` × the detector pixels, then ``supersampling`` ×
@@ -35,16 +20,14 @@ import astropy.constants as const
 import astropy.units as u
 import numpy as np
 import scipy.fft
-import scipy.interpolate
 import scipy.sparse
-import scipy.special
 
-from gongsynth.stages.scene.scene import BOUNDARIES
 from gongsynth.instrument import resolve_instrument
+from gongsynth.stages.psf import normalize_kernel, psf_instrument, psf_kernel, psf_profile
+from gongsynth.stages.scene.scene import BOUNDARIES
 from gongsynth.validation import check_finite, check_quantity
 
 __all__ = [
-    "PSF_RADIUS",
     "psf_profile",
     "psf_kernel",
     "normalize_kernel",
@@ -56,199 +39,17 @@ __all__ = [
     "expected_counts",
 ]
 
-#: Edge handling of `convolve`: the scene repeats ("periodic"), is dark beyond
-#: the field ("zero", full disk) or continues smoothly ("reflect", tiled fields
-#: that are not exactly periodic).
 
-#: Default truncation radius of `psf_kernel`; the Airy pattern encloses
-#: 1 - 2/(π² ν_c r) ≈ 99 % of its energy within it.
-PSF_RADIUS = 100 * u.arcsec
-
-# Gauss-Legendre nodes of the Hankel transform over [0, ν_c]: the integrand
-# oscillates ν_c r ≈ 30 times at r = 150″; 768 nodes give < 1e-9 relative error.
-_N_HANKEL = 768
-# Radial sampling (arcsec) of the profile that `psf_kernel` interpolates.
-_SPLINE_STEP = 0.05
-
-
-def _cutoff_per_arcsec(inst):
-    """Airy OTF cut-off D/λ0 in cycles per arcsec."""
-    return float((inst.aperture / inst.line_wavelength).to_value(u.one) * u.arcsec.to(u.rad))
-
-
-def _seeing_sigma(inst):
-    return inst.seeing_fwhm.to_value(u.arcsec) / (2 * math.sqrt(2 * math.log(2)))
-
-
-@functools.lru_cache(maxsize=1)
-def _hankel_nodes():
-    """Gauss-Legendre nodes and weights on [0, 1] (an eigenproblem: compute once)."""
-    x, w = np.polynomial.legendre.leggauss(_N_HANKEL)
-    return 0.5 * (x + 1), 0.5 * w
-
-
-def _profile(radius, inst):
-    """PSF(r) per arcsec² for radii in arcsec (ndarray, any shape)."""
-    nu_c = _cutoff_per_arcsec(inst)
-    sigma = _seeing_sigma(inst)
-    s, w = _hankel_nodes()
-    otf = (2 / math.pi) * (np.arccos(s) - s * np.sqrt(1 - s * s))
-    otf *= np.exp(-2 * math.pi**2 * sigma**2 * (s * nu_c) ** 2)
-    weight = 2 * math.pi * nu_c**2 * w * s * otf  # dν = ν_c ds, ν = ν_c s
-    r = np.asarray(radius, dtype=float)
-    flat, inverse = np.unique(r.ravel(), return_inverse=True)
-    values = np.empty(flat.size)
-    for start in range(0, flat.size, 4096):  # bounded (4096 x nodes) temporaries
-        block = flat[start:start + 4096]
-        values[start:start + 4096] = scipy.special.j0(
-            2 * math.pi * nu_c * np.outer(block, s)) @ weight
-    return values[inverse].reshape(r.shape)
-
-
-@u.quantity_input
-def psf_profile(radius: u.arcsec, instrument=None):
-    """
-    Radial profile of the PSF (Airy ⊗ Gaussian seeing), unit integral over the plane.
-
-    Parameters
-    ----------
-    radius : `~astropy.units.Quantity`
-        Angular distance from the centre, any shape, in angle units.
-    instrument : `~gongsynth.GONGInstrument`, optional
-        Supplies ``aperture``, ``line_wavelength`` and ``seeing_fwhm``
-        (0 arcsec gives the pure Airy pattern).
-
-    Returns
-    -------
-    `~astropy.units.Quantity`
-        PSF surface density in arcsec⁻², same shape as ``radius``.
-
-    Examples
-    --------
-    >>> import astropy.units as u
-    >>> from gongsynth import GONGInstrument
-    >>> airy = GONGInstrument(seeing_fwhm=0 * u.arcsec)
-    >>> p = psf_profile([0, 6.08] * u.arcsec, airy)
-    >>> bool(p[1] < 1e-4 * p[0])   # first Airy zero at 1.22 λ/D
-    True
-    """
-    inst = resolve_instrument(instrument)
-    r = np.abs(radius.to_value(u.arcsec))
-    check_finite(r, "radius")
-    return u.Quantity(_profile(r, inst), u.arcsec**-2)
-
-
-def _default_half_width(pixel_scale_arcsec):
-    return max(1, int(math.ceil(PSF_RADIUS.to_value(u.arcsec) / pixel_scale_arcsec)))
-
-
-@functools.lru_cache(maxsize=16)
-def _kernel_cached(scale, inst, shape):
-    ny, nx = shape
-    y = (np.arange(ny) - ny // 2) * scale
-    x = (np.arange(nx) - nx // 2) * scale
-    r = np.hypot(y[:, None], x[None, :])
-    # The profile is band limited (ν ≤ 0.2 /″): a cubic spline through samples
-    # every 0.05″ reproduces it to ~1e-8 and costs far less than every radius.
-    grid = np.arange(0.0, r.max() + 4 * _SPLINE_STEP, _SPLINE_STEP)
-    kernel = scipy.interpolate.CubicSpline(grid, _profile(grid, inst))(r)
-    kernel /= kernel.sum()
-    kernel.flags.writeable = False
-    return kernel
-
-
-@u.quantity_input
-def psf_kernel(pixel_scale: u.arcsec, instrument=None, *, shape=None):
-    """
-    The PSF sampled on a grid of ``pixel_scale``, normalised to unit sum.
-
-    The centre of the PSF is at index ``(ny // 2, nx // 2)``.  Samples are
-    point values of `psf_profile`; this is exact for the band-limited PSF as
-    long as ``pixel_scale`` is finer than λ0/(2D) ≈ 2.49″ and slightly aliased
-    at GONG's 2.5″.
-
-    Parameters
-    ----------
-    pixel_scale : `~astropy.units.Quantity`
-        Grid spacing, angle (arcsec), positive.
-    instrument : `~gongsynth.GONGInstrument`, optional
-    shape : int or (int, int), optional
-        Kernel size in pixels.  Default: the odd square that reaches
-        `PSF_RADIUS` (100″) from the centre.
-
-    Returns
-    -------
-    `numpy.ndarray`
-        2-D float64 kernel with unit sum (a read-only cached array; copy it to modify).
-
-    Examples
-    --------
-    >>> import astropy.units as u
-    >>> k = psf_kernel(0.5 * u.arcsec, shape=65)
-    >>> k.shape, round(float(k.sum()), 12)
-    ((65, 65), 1.0)
-    """
-    inst = resolve_instrument(instrument)
-    scale = float(pixel_scale.to_value(u.arcsec))
-    if not (math.isfinite(scale) and scale > 0):
-        raise ValueError(f"pixel_scale must be positive and finite, got {pixel_scale}")
-    if shape is None:
-        half = _default_half_width(scale)
-        shape = (2 * half + 1, 2 * half + 1)
-    elif np.ndim(shape) == 0:
-        shape = (int(shape), int(shape))
-    shape = tuple(int(n) for n in shape)
-    if len(shape) != 2 or min(shape) < 1:
-        raise ValueError(f"shape must be a positive int or a pair of positive ints, got {shape}")
-    return _kernel_cached(scale, inst, shape)
-
-
-def normalize_kernel(kernel, name="psf"):
-    """
-    Check a user PSF array and scale it to unit sum.
-
-    Parameters
-    ----------
-    kernel : array_like
-        2-D array, finite, with a positive sum; centre at ``(ny // 2, nx // 2)``.
-    name : str
-        Argument name for error messages.
-
-    Returns
-    -------
-    `numpy.ndarray`
-        float64 copy with unit sum.
-
-    Raises
-    ------
-    ValueError
-        If the array is not 2-D, not finite, or its sum is not positive.
-
-    Examples
-    --------
-    >>> float(normalize_kernel([[0, 1, 0], [1, 4, 1], [0, 1, 0]]).sum())
-    1.0
-    """
-    if isinstance(kernel, u.Quantity):
-        if kernel.unit.physical_type != "dimensionless":
-            raise u.UnitsError(f"{name} must be dimensionless, got unit {kernel.unit}")
-        kernel = kernel.to_value(u.one)
-    k = np.array(kernel, dtype=float)
-    if k.ndim != 2 or k.size == 0:
-        raise ValueError(f"{name} must be a non-empty 2-D array, got shape {k.shape}")
-    check_finite(k, name)
-    total = k.sum()
-    if not total > 0:
-        raise ValueError(f"{name} cannot be normalised: its sum must be positive, got {total!r}")
-    return k / total
-
-
-def _resolve_kernel(psf, scale, inst):
-    """None -> instrument PSF, False -> no PSF, array -> normalised user kernel."""
-    if psf is None:
-        return psf_kernel(scale * u.arcsec, inst)
+def _resolve_kernel(psf, seeing, scale, inst):
+    """True/None -> instrument PSF (with or without seeing), False -> no PSF, array -> user kernel."""
+    psf_instrument(inst, seeing=seeing)  # checks the switch
+    if psf is None or psf is True:
+        return psf_kernel(scale * u.arcsec, inst, seeing=seeing)
     if psf is False:
         return None
+    if not seeing:
+        raise ValueError("seeing=False applies to the instrument PSF; a user psf kernel is used as "
+                         "given (pass psf=True for the diffraction-limited instrument PSF)")
     return normalize_kernel(psf)
 
 
@@ -492,7 +293,7 @@ def pixelize(stack, pixel_scale: u.arcsec, *, instrument=None, periodic=False, m
 
 
 @u.quantity_input
-def observe(stack, pixel_scale: u.arcsec, *, instrument=None, psf=None, boundary="periodic",
+def observe(stack, pixel_scale: u.arcsec, *, instrument=None, psf=True, seeing=True, boundary="periodic",
             method="bilinear", workers=None):
     """
     PSF (optional) then pixelization of any stack: light and ground truth alike.
@@ -504,10 +305,15 @@ def observe(stack, pixel_scale: u.arcsec, *, instrument=None, psf=None, boundary
     pixel_scale : `~astropy.units.Quantity`
         Sampling of ``stack`` (arcsec per pixel).
     instrument : `~gongsynth.GONGInstrument`, optional
-    psf : None, False or array_like
-        ``None``: the instrument PSF (`psf_kernel`); ``False``: no PSF (pixel
-        average only, e.g. for a truth map); an array: a user kernel sampled at
-        ``pixel_scale``, centre at ``(ky // 2, kx // 2)``, normalised to unit sum.
+    psf : bool, None or array_like
+        ``True`` (default; ``None`` is the same): the instrument PSF
+        (`psf_kernel`); ``False``: no PSF at all (pixel average only, e.g. for
+        a truth map); an array: a user kernel sampled at ``pixel_scale``,
+        centre at ``(ky // 2, kx // 2)``, normalised to unit sum.
+    seeing : bool
+        ``True`` (default): the instrument PSF includes the Gaussian seeing;
+        ``False``: diffraction only (the Airy pattern of the aperture).  Only
+        meaningful with the instrument PSF (an error with a user kernel).
     boundary : {"periodic", "zero", "reflect"}
         Edge handling of the convolution (see `convolve`); ``"periodic"`` also
         makes the resampling wrap.
@@ -529,9 +335,11 @@ def observe(stack, pixel_scale: u.arcsec, *, instrument=None, psf=None, boundary
     >>> out = observe(flat, 0.5 * u.arcsec)
     >>> out.shape, bool(np.allclose(out, 1))
     ((2, 10, 10), True)
+    >>> bool(np.allclose(observe(flat, 0.5 * u.arcsec, psf=False), 1))
+    True
     """
     inst = resolve_instrument(instrument)
-    kernel = _resolve_kernel(psf, pixel_scale.to_value(u.arcsec), inst)
+    kernel = _resolve_kernel(psf, seeing, pixel_scale.to_value(u.arcsec), inst)
     periodic = boundary == "periodic"
     if kernel is None:
         return pixelize(stack, pixel_scale, instrument=inst, periodic=periodic, method=method)
@@ -574,7 +382,7 @@ def photometric_factor(instrument=None):
     return (factor.to(u.arcsec**2 * u.cm**2 * u.s / u.erg)) * u.electron
 
 
-def expected_counts(scene, instrument=None, *, psf=None, workers=None):
+def expected_counts(scene, instrument=None, *, psf=True, seeing=True, workers=None):
     """
     Expected electrons per frame in each detector pixel for the six planes.
 
@@ -587,8 +395,11 @@ def expected_counts(scene, instrument=None, *, psf=None, workers=None):
         Radiance at Earth per arcsec², ``(6, NY, NX)`` (any leading length works).
     instrument : `~gongsynth.GONGInstrument`, optional
         Defaults to the instrument the scene was built with.
-    psf : None, False or array_like
-        As in `observe`.
+    psf : bool, None or array_like
+        As in `observe`: ``True`` (default) the instrument PSF, ``False`` none,
+        or a user kernel.
+    seeing : bool
+        As in `observe`: ``False`` for the diffraction-limited PSF.
     workers : int, optional
         Threads for the FFTs.
 
@@ -610,7 +421,7 @@ def expected_counts(scene, instrument=None, *, psf=None, workers=None):
     """
     inst = resolve_instrument(instrument if instrument is not None else getattr(scene, "instrument", None))
     radiance = check_quantity(scene.data, u.erg / (u.s * u.cm**2 * u.arcsec**2), "scene.data")
-    planes = observe(radiance, scene.pixel_scale, instrument=inst, psf=psf,
+    planes = observe(radiance, scene.pixel_scale, instrument=inst, psf=psf, seeing=seeing,
                      boundary=scene.boundary, workers=workers)
     counts = (planes * photometric_factor(inst)).to(u.electron)
     # FFT convolution leaves round-off of either sign (~1e-16 of the peak) where

@@ -17,21 +17,22 @@ about the reference: with a line at rest |B| up to about 4.7 kG is measured
 without wrapping, less when the line is Doppler shifted.  A wrapped pixel
 cannot be recognised from its own six numbers, so `Observables.wrapped` flags
 the pixels *at risk*: those where either polarisation's phase lies within
-``wrap_margin`` (0.3 rad ≈ 650 m/s ≈ 450 G by default) of ±π.  With a line at
+``wrap_margin`` (the instrument's, 0.3 rad ≈ 650 m/s ≈ 450 G by default) of ±π.  With a line at
 rest that flags 4.3 kG < |B| < 5.2 kG; fields stronger still wrap to values
 that look ordinary.
 """
 import functools
 import math
+import os
 from dataclasses import dataclass
 
 import astropy.units as u
 import numpy as np
 
-from gongsynth.stages.camera.detector import normalise_flat
-from gongsynth.stages.filters import filter_quadrature
 from gongsynth.instrument import resolve_instrument
 from gongsynth.planes import N_CHANNELS, N_PLANES
+from gongsynth.stages.camera.detector import normalise_flat, read_dark
+from gongsynth.stages.filters import filter_quadrature
 from gongsynth.validation import check_finite, check_quantity
 
 __all__ = ["Observables", "reduce", "subtract_dark", "divide_flat", "measured_phase", "phase_to_velocity",
@@ -182,8 +183,7 @@ def phase_to_velocity(phase, instrument=None):
     return (inst.v0 * delta * u.rad).to(u.m / u.s)
 
 
-def reduce(raw, instrument=None, dark=None, flat=None, *, frames_per_plane=None,
-           wrap_margin=0.3 * u.rad):
+def reduce(raw, instrument=None, dark=None, flat=None, *, frames_per_plane=None, wrap_margin=None):
     """
     Reduce six raw planes to a magnetogram, a Dopplergram and a pseudo-continuum.
 
@@ -193,18 +193,25 @@ def reduce(raw, instrument=None, dark=None, flat=None, *, frames_per_plane=None,
         The planes, shape (6, ...) in DN, ordered as in `gongsynth.planes`.
         Any spatial shape works (including none: a single pixel).
     instrument : `~gongsynth.GONGInstrument`, optional
-        Supplies v0, the Landé factor, the gain, the truncation and the filter
-        model that fixes the velocity zero point.
-    dark : `~astropy.units.Quantity`, optional
-        Dark current in electron per frame (as given to the camera).  Defaults to
-        ``raw.dark`` when ``raw`` carries one, else no dark subtraction.
-    flat : array_like, optional
-        Flat field as given to the camera.  Defaults to ``raw.flat`` if present.
+        Supplies v0, the Landé factor, the gain, the truncation, the wrap
+        margin and the filter model that fixes the velocity zero point.
+    dark : None, bool, `~astropy.units.Quantity`, str or path-like
+        ``None`` or ``True`` (default): the dark the camera used, ``raw.dark``,
+        when ``raw`` carries one, else no dark subtraction; ``False``: a zero
+        dark (no subtraction, as after ``integrate(..., dark=False)``); a
+        Quantity (electron per frame, scalar or the planes' shape) or a FITS
+        path: that dark.
+    flat : None, bool, array_like, str or path-like
+        ``None`` or ``True`` (default): the flat the camera used, ``raw.flat``,
+        when present, else none; ``False``: a unity flat (no division, as
+        after ``integrate(..., flat=False)``); an array or a FITS path: that
+        flat, as given to the camera.
     frames_per_plane : array_like of int, optional
         Frames in each plane; taken from ``raw.frames_per_plane`` if omitted.
         Needed only for the dark subtraction.
-    wrap_margin : `~astropy.units.Quantity`
-        Angular distance from ±π below which a pixel is flagged as wrapped.
+    wrap_margin : `~astropy.units.Quantity`, optional
+        Angular distance from ±π below which a pixel is flagged as wrapped;
+        default the instrument's ``wrap_margin`` (0.3 rad).
 
     Returns
     -------
@@ -232,15 +239,17 @@ def reduce(raw, instrument=None, dark=None, flat=None, *, frames_per_plane=None,
     carried = {} if isinstance(raw, np.ndarray) or not hasattr(raw, "frames_per_plane") else {
         "dark": getattr(raw, "dark", None), "flat": getattr(raw, "flat", None),
         "frames": raw.frames_per_plane}
-    dark = carried.get("dark") if dark is None else dark
-    flat = carried.get("flat") if flat is None else flat
-    if dark is not None:
+    dark = carried.get("dark") if dark is None or dark is True else dark
+    flat = carried.get("flat") if flat is None or flat is True else flat
+    if dark is not None and dark is not False:
         if frames_per_plane is None:
             frames_per_plane = carried.get("frames")
         if frames_per_plane is None:
             raise ValueError("frames_per_plane is needed to subtract a dark from a plain array")
+        if isinstance(dark, (str, os.PathLike)):
+            dark = read_dark(dark)
         planes = subtract_dark(planes, dark, frames_per_plane, inst)
-    if flat is not None:
+    if flat is not None and flat is not False:
         planes = divide_flat(planes, flat)
 
     phases = np.stack([measured_phase(planes[p * N_CHANNELS:(p + 1) * N_CHANNELS])
@@ -248,6 +257,7 @@ def reduce(raw, instrument=None, dark=None, flat=None, *, frames_per_plane=None,
     velocity = phase_to_velocity(phases, inst)
     doppler = velocity.mean(axis=0)
     magnetogram = (inst.gauss_per_velocity * (velocity[0] - velocity[1]) / 2).to(u.G)
+    wrap_margin = inst.wrap_margin if wrap_margin is None else wrap_margin
     margin = check_quantity(wrap_margin, u.rad, "wrap_margin").to_value(u.rad)
     offset = np.angle(np.exp(1j * (reference_phase(inst).value - phases)))
     wrapped = np.any(np.abs(offset) > math.pi - margin, axis=0)

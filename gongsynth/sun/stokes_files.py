@@ -157,8 +157,10 @@ def read_fits(path):
         missing = [n for n in (*STOKES, "WAVELENGTH") if n not in names]
         if missing:
             raise ValueError(f"{path} is not a complete Stokes cube: missing extension(s) {missing}")
-        if "PIXSIZE" not in hdr:
-            raise ValueError(f"{path} has no PIXSIZE keyword (column size in km)")
+        for keyword, what in (("PIXSIZE", "the column size in km"),
+                              ("MU", "the cosine of the viewing angle, or 'ARRAY'")):
+            if keyword not in hdr:
+                raise ValueError(f"{path} has no {keyword} keyword ({what})")
         try:
             meta = json.loads(hdr.get("GSMETA", "{}"))
         except json.JSONDecodeError as exc:
@@ -172,7 +174,12 @@ def read_fits(path):
                 raise ValueError(f"{path}: extension {name} must hold a 3-D array (ny, nx, nλ)")
             unit = u.Unit(hdu.header.get("BUNIT", RADIANCE_UNIT.to_string()))
             # Big-endian on disk: one native float32 copy per Stokes parameter.
-            stokes.append(u.Quantity(np.array(hdu.data, dtype=np.float32), unit, copy=False))
+            try:
+                values = np.array(hdu.data, dtype=np.float32)
+            except (ValueError, OSError) as exc:  # a truncated file cannot fill the array
+                raise ValueError(f"{path}: extension {name} cannot be read; is the file truncated? "
+                                 f"({exc})") from exc
+            stokes.append(u.Quantity(values, unit, copy=False))
         if hdr["MU"] == "ARRAY":
             if "MU" not in names:
                 raise ValueError(f"{path}: MU = 'ARRAY' but there is no MU extension")

@@ -4,7 +4,8 @@ Detector calibration maps: flat field and dark current.
 No real GONG flat or dark frame is publicly available (see the project's data
 provenance notes), so gongsynth ships *synthetic* GONG-like defaults, built
 deterministically from a fixed seed so that the camera and the reduction see
-the same maps:
+the same maps (every knob, and the seed, is a `~gongsynth.GONGInstrument`
+field):
 
 * `synthetic_flat`: a large-scale gradient (a linear tilt plus radial
   vignetting), soft-edged circular dust shadows (out-of-focus dust on a window
@@ -23,15 +24,13 @@ import astropy.units as u
 import numpy as np
 from astropy.io import fits
 
+from gongsynth.instrument import resolve_instrument
 from gongsynth.planes import N_PLANES
 from gongsynth.seeding import stage_generator
 from gongsynth.validation import check_finite, check_quantity
 
 __all__ = ["synthetic_flat", "synthetic_dark", "read_flat", "read_dark", "normalise_flat",
-           "prepare_dark", "DEFAULT_MAP_SEED"]
-
-#: Seed of the default synthetic flat and dark (fixed, so every stage sees the same maps).
-DEFAULT_MAP_SEED = 20190601
+           "prepare_dark"]
 
 
 def _shape2(shape, name="shape"):
@@ -44,8 +43,21 @@ def _shape2(shape, name="shape"):
     return ny, nx
 
 
-def synthetic_flat(shape=(860, 860), *, seed=DEFAULT_MAP_SEED, tilt=0.03, vignetting=0.04,
-                   dust_density=40.0, dust_depth=(0.01, 0.05), dust_radius=(3.0, 12.0), prnu=0.01):
+def _detector_shape(shape, inst):
+    """``shape`` as (ny, nx), or the instrument's square detector when None."""
+    if shape is None:
+        return inst.detector_shape, inst.detector_shape
+    return _shape2(shape)
+
+
+def _number(value, default, unit):
+    """A keyword override as a float, or the instrument's value in ``unit``."""
+    value = default if value is None else value
+    return float(u.Quantity(value, unit).to_value(unit)) if isinstance(value, u.Quantity) else value
+
+
+def synthetic_flat(shape=None, *, instrument=None, seed=None, tilt=None, vignetting=None,
+                   dust_density=None, dust_depth=None, dust_radius=None, prnu=None):
     """
     A synthetic GONG-like flat field (gain map), median-normalised.
 
@@ -54,24 +66,33 @@ def synthetic_flat(shape=(860, 860), *, seed=DEFAULT_MAP_SEED, tilt=0.03, vignet
     in units of the half diagonal, and each dust shadow a soft-edged disc
     d / (1 + (r/R)⁸).
 
+    Every knob defaults to the instrument's value (`~gongsynth.GONGInstrument`
+    fields ``detector_map_seed`` and ``flat_*``); a keyword overrides it.
+
     Parameters
     ----------
-    shape : tuple of int
-        (ny, nx) in pixels.
-    seed : seed-like
-        Seed of the dust positions, gradient direction and PRNU.
-    tilt : float
-        Peak-to-centre amplitude of the linear gradient (fraction).
-    vignetting : float
-        Fractional darkening in the corners.
-    dust_density : float
-        Mean number of dust shadows per million pixels (≈ 30 on 860 × 860).
-    dust_depth : tuple of float
-        Range of the shadows' central depths (fraction), drawn uniformly.
-    dust_radius : tuple of float
-        Range of the shadows' radii in pixels, drawn uniformly.
-    prnu : float
-        RMS pixel-to-pixel response non-uniformity (fraction).
+    shape : tuple of int, optional
+        (ny, nx) in pixels; default the instrument's ``detector_shape`` square.
+    instrument : `~gongsynth.GONGInstrument`, optional
+        Supplies the defaults below.
+    seed : seed-like, optional
+        Seed of the dust positions, gradient direction and PRNU
+        (``detector_map_seed``, 20190601).
+    tilt : float, optional
+        Peak-to-centre amplitude of the linear gradient, fraction (``flat_tilt``, 0.03).
+    vignetting : float, optional
+        Fractional darkening in the corners (``flat_vignetting``, 0.04).
+    dust_density : float, optional
+        Mean number of dust shadows per million pixels (``flat_dust_density``,
+        40, ≈ 30 on 860 × 860).
+    dust_depth : tuple of float, optional
+        Range of the shadows' central depths (fraction), drawn uniformly
+        (``flat_dust_depth_min``, ``flat_dust_depth_max``: 0.01, 0.05).
+    dust_radius : tuple of float, optional
+        Range of the shadows' radii in pixels, drawn uniformly
+        (``flat_dust_radius_min``, ``flat_dust_radius_max``: 3, 12).
+    prnu : float, optional
+        RMS pixel-to-pixel response non-uniformity, fraction (``flat_prnu``, 0.01).
 
     Returns
     -------
@@ -86,11 +107,27 @@ def synthetic_flat(shape=(860, 860), *, seed=DEFAULT_MAP_SEED, tilt=0.03, vignet
     >>> bool(0.005 < np.std(f - np.roll(f, 1, axis=1)) / np.sqrt(2) < 0.02)
     True
     """
-    ny, nx = _shape2(shape)
+    inst = resolve_instrument(instrument)
+    ny, nx = _detector_shape(shape, inst)
+    seed = inst.detector_map_seed if seed is None else seed
+    tilt = _number(tilt, inst.flat_tilt, u.one)
+    vignetting = _number(vignetting, inst.flat_vignetting, u.one)
+    dust_density = _number(dust_density, inst.flat_dust_density, 1 / u.Mpix)
+    prnu = _number(prnu, inst.flat_prnu, u.one)
+    if dust_depth is None:
+        dust_depth = (inst.flat_dust_depth_min, inst.flat_dust_depth_max)
+    if dust_radius is None:
+        dust_radius = (inst.flat_dust_radius_min, inst.flat_dust_radius_max)
+    dust_depth = tuple(_number(d, None, u.one) for d in dust_depth)
+    dust_radius = tuple(_number(r, None, u.pix) for r in dust_radius)
     for name, value in (("tilt", tilt), ("vignetting", vignetting), ("prnu", prnu),
                         ("dust_density", dust_density)):
         if not (np.isfinite(value) and 0 <= value < (1e6 if name == "dust_density" else 0.5)):
             raise ValueError(f"{name} must be a small non-negative number, got {value!r}")
+    for name, (low, high), top in (("dust_depth", dust_depth, 1.0), ("dust_radius", dust_radius, np.inf)):
+        if not (np.isfinite(low) and np.isfinite(high) and 0 <= low <= high < top):
+            raise ValueError(f"{name} must be an ordered (min, max) pair of non-negative numbers"
+                             f"{' below 1' if top == 1 else ''}, got {(low, high)!r}")
     rng = stage_generator(seed, "synthetic-flat")
     y = np.linspace(-1, 1, ny)[:, None]
     x = np.linspace(-1, 1, nx)[None, :]
@@ -114,31 +151,39 @@ def synthetic_flat(shape=(860, 860), *, seed=DEFAULT_MAP_SEED, tilt=0.03, vignet
     return flat / np.median(flat)
 
 
-def synthetic_dark(shape=(860, 860), *, level=30 * u.electron, seed=DEFAULT_MAP_SEED, glow=0.2,
-                   hot_fraction=1e-3, hot_factor=10.0):
+def synthetic_dark(shape=None, *, instrument=None, level=None, seed=None, glow=None, glow_length=None,
+                   hot_fraction=None, hot_factor=None):
     """
     A synthetic dark-current map in electrons per frame.
 
-    dark = level × (1 + glow·g(x, y)) with g a smooth amplifier-glow ramp that
-    is 1 in one corner and falls off over a quarter of the detector (mean of
-    g ≈ 0.1), and a fraction ``hot_fraction`` of hot pixels at ``hot_factor``
-    times the level.
+    dark = level × (1 + glow·exp(−ρ / glow_length)) with ρ the distance from
+    one corner in units of the detector side (an amplifier-glow ramp, mean
+    ≈ 0.1 of ``glow`` for the default length), and a fraction
+    ``hot_fraction`` of hot pixels at ``hot_factor`` times the level.
+
+    Every knob defaults to the instrument's value (`~gongsynth.GONGInstrument`
+    fields ``detector_map_seed`` and ``dark_*``); a keyword overrides it.
 
     Parameters
     ----------
-    shape : tuple of int
-        (ny, nx) in pixels.
-    level : `~astropy.units.Quantity`
-        Typical dark current per frame, electron (default 30 e⁻ ≈ 0.9 ADU per
-        1/60 s frame: illustrative, not a measured GONG value).
-    seed : seed-like
-        Seed of the hot-pixel positions.
-    glow : float
-        Amplitude of the amplifier glow relative to ``level``.
-    hot_fraction : float
-        Fraction of hot pixels.
-    hot_factor : float
-        Dark current of a hot pixel in units of ``level``.
+    shape : tuple of int, optional
+        (ny, nx) in pixels; default the instrument's ``detector_shape`` square.
+    instrument : `~gongsynth.GONGInstrument`, optional
+        Supplies the defaults below.
+    level : `~astropy.units.Quantity`, optional
+        Typical dark current per frame, electron (``dark_level``, 30 e⁻ ≈ 0.9
+        ADU per 1/60 s frame: illustrative, not a measured GONG value).
+    seed : seed-like, optional
+        Seed of the hot-pixel positions (``detector_map_seed``).
+    glow : float, optional
+        Amplitude of the amplifier glow relative to ``level`` (``dark_glow``, 0.2).
+    glow_length : float, optional
+        e-folding length of the glow in units of the detector side
+        (``dark_glow_length``, 0.25).
+    hot_fraction : float, optional
+        Fraction of hot pixels (``dark_hot_fraction``, 0.001).
+    hot_factor : float, optional
+        Dark current of a hot pixel in units of ``level`` (``dark_hot_factor``, 10).
 
     Returns
     -------
@@ -152,17 +197,26 @@ def synthetic_dark(shape=(860, 860), *, level=30 * u.electron, seed=DEFAULT_MAP_
     >>> d.unit, d.shape, bool(10 <= float(np.median(d.value)) < 12)
     (Unit("electron"), (32, 32), True)
     """
-    ny, nx = _shape2(shape)
+    inst = resolve_instrument(instrument)
+    ny, nx = _detector_shape(shape, inst)
+    level = inst.dark_level if level is None else level
+    seed = inst.detector_map_seed if seed is None else seed
+    glow = _number(glow, inst.dark_glow, u.one)
+    glow_length = _number(glow_length, inst.dark_glow_length, u.one)
+    hot_fraction = _number(hot_fraction, inst.dark_hot_fraction, u.one)
+    hot_factor = _number(hot_factor, inst.dark_hot_factor, u.one)
     check_quantity(level, u.electron, "level")
     lvl = float(level.to_value(u.electron))
     if not np.isfinite(lvl) or lvl < 0:
         raise ValueError(f"level must be finite and non-negative, got {level}")
     if not (0 <= hot_fraction <= 1) or hot_factor < 0 or glow < 0:
         raise ValueError("glow, hot_fraction (0-1) and hot_factor must be non-negative")
+    if not glow_length > 0:
+        raise ValueError(f"glow_length must be positive, got {glow_length!r}")
     rng = stage_generator(seed, "synthetic-dark")
     y = np.arange(ny)[:, None] / max(ny - 1, 1)
     x = np.arange(nx)[None, :] / max(nx - 1, 1)
-    dark = lvl * (1 + glow * np.exp(-np.hypot(x, y) / 0.25))
+    dark = lvl * (1 + glow * np.exp(-np.hypot(x, y) / glow_length))
     hot = rng.random((ny, nx)) < hot_fraction
     dark[hot] = lvl * hot_factor
     return dark * u.electron

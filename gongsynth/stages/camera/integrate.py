@@ -51,17 +51,17 @@ import astropy.units as u
 import numpy as np
 from astropy.io import fits
 
-from gongsynth.stages.camera.detector import normalise_flat, prepare_dark, synthetic_dark, synthetic_flat
 from gongsynth.files import atomic_path
 from gongsynth.instrument import resolve_instrument
 from gongsynth.planes import N_PLANES, PLANE_NAMES
-from gongsynth.stages.camera.schedule import frame_schedule
 from gongsynth.seeding import as_seed_sequence, child_sequence, stage_generator
+from gongsynth.stages.camera.detector import normalise_flat, prepare_dark, synthetic_dark, synthetic_flat
+from gongsynth.stages.camera.schedule import frame_schedule
 from gongsynth.validation import check_quantity
 
 __all__ = ["RawPlanes", "integrate", "ENGINES", "snapshot_index"]
 
-#: The accepted values of ``engine``.
+#: The accepted values of ``engine`` (the one definition: the configuration imports it).
 ENGINES = ("frames", "blocks")
 
 # Pixels per progress-bar step of the frames engine (bounded memory per chunk).
@@ -237,8 +237,33 @@ def _progress(total, enabled, engine):
     return tqdm(total=total, disable=not enabled, desc=f"camera ({engine})", unit="row")
 
 
+def _flat_map(flat, shape, inst):
+    """(source label, median-normalised (6, ny, nx) flat) for the ``flat`` argument of `integrate`."""
+    if flat is None or flat is True:
+        return "synthetic", normalise_flat(synthetic_flat(shape, instrument=inst), shape)
+    if flat is False:
+        return "none", normalise_flat(np.ones(shape), shape)
+    return "user", normalise_flat(flat, shape)
+
+
+def _dark_map(dark, shape, inst):
+    """(source label, (ny, nx) dark in electron) for the ``dark`` argument of `integrate`."""
+    if dark is None or dark is True:
+        return "synthetic", prepare_dark(synthetic_dark(shape, instrument=inst), shape)
+    if dark is False:
+        return "none", prepare_dark(0 * u.electron, shape)
+    return "user", prepare_dark(dark, shape)
+
+
+def _switch(value, name):
+    if not isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"{name} must be True or False, got {value!r}")
+    return bool(value)
+
+
 def integrate(expected, *, duration=10 * u.min, engine="blocks", seed=None, instrument=None,
-              flat=None, dark=None, chunk_rows=None, workers=None, progress=True):
+              flat=None, dark=None, photon_noise=True, read_noise=True, dither=True, truncation=True,
+              chunk_rows=None, workers=None, progress=True):
     """
     Accumulate a GONG observation into the six raw planes.
 
@@ -254,18 +279,42 @@ def integrate(expected, *, duration=10 * u.min, engine="blocks", seed=None, inst
         10 min (default) for the paper's.
     engine : {"blocks", "frames"}
         ``"blocks"`` draws each plane's sum directly (fast, statistically
-        equivalent); ``"frames"`` simulates every frame.
+        equivalent); ``"frames"`` simulates every frame.  See `ENGINES`.
     seed : None, int, `numpy.random.SeedSequence` or `numpy.random.Generator`
         Root seed; its entropy is written to the header.
     instrument : `~gongsynth.GONGInstrument`, optional
-        Supplies the schedule, gain, read noise, dither and truncation.
-    flat : array_like, str or path-like, optional
-        Flat field (ny, nx) or (6, ny, nx), median-normalised per plane
-        inside; a FITS path is read.  Default: `~gongsynth.stages.camera.detector.synthetic_flat`.
-        Pass ``np.ones((ny, nx))`` for a perfect detector.
-    dark : `~astropy.units.Quantity`, str or path-like, optional
-        Dark current, electron per frame, scalar or (ny, nx); a FITS path is
-        read.  Default: `~gongsynth.stages.camera.detector.synthetic_dark`.
+        Supplies the schedule, gain, read noise, dither, truncation and the
+        synthetic flat and dark.
+    flat : None, bool, array_like, str or path-like
+        ``None`` or ``True`` (default): the instrument's
+        `~gongsynth.stages.camera.detector.synthetic_flat`; ``False``: a unity
+        flat (a perfect detector); an array (ny, nx) or (6, ny, nx), or a FITS
+        path: a user flat, median-normalised per plane inside.
+    dark : None, bool, `~astropy.units.Quantity`, str or path-like
+        ``None`` or ``True`` (default): the instrument's
+        `~gongsynth.stages.camera.detector.synthetic_dark`; ``False``: no dark
+        current (0 e⁻); a Quantity (electron per frame, scalar or (ny, nx)) or
+        a FITS path: a user dark.
+    photon_noise : bool
+        Draw each frame's electrons from Poisson(f E + D) (default).  False
+        uses the expected electrons f E + D themselves: no photon or
+        dark-current shot noise.
+    read_noise : bool
+        Add the instrument's Gaussian read noise to each frame (default).
+        False: none (in the frames engine exactly as an instrument with
+        ``read_noise = 0 adu``).  The blocks engine treats each frame's
+        rounding as noise, which needs read noise of at least 1 adu: it
+        accepts ``read_noise=False`` only together with
+        ``photon_noise=False``, where it computes the (then deterministic)
+        per-frame rounding exactly.
+    dither : bool
+        Add the dither sequence to the frames (and remove its exact sum from
+        each plane; default).  False: no dither (DITHSUM = 0 in the header).
+    truncation : bool
+        Drop the ``truncate_bits`` lowest bits of each accumulated plane and
+        put back the mean bias of doing so (default).  False: keep every bit;
+        the plane is the exact sum (S - Σd) / 2^b, still in DN (1 DN = 2^b adu)
+        so that the reduction is unchanged, with no truncation offset.
     chunk_rows : int, optional
         Detector rows per chunk (memory bound and progress step); never
         changes the result.
@@ -282,59 +331,85 @@ def integrate(expected, *, duration=10 * u.min, engine="blocks", seed=None, inst
     ------
     TypeError, astropy.units.UnitsError, ValueError
         On bad units, shapes, negative or non-finite input, an unknown engine,
-        or ``engine="blocks"`` with read noise below 1 adu.
+        a switch that is not a bool, or ``engine="blocks"`` with read noise
+        below 1 adu (or switched off while photon noise is on).
+
+    Notes
+    -----
+    With ``photon_noise``, ``read_noise``, ``dither`` and ``truncation`` all
+    False the planes are deterministic, Σ_k round((f E_k + D) / g) / 2^b, and
+    both engines give exactly the same numbers.
 
     Examples
     --------
     >>> import numpy as np
     >>> import astropy.units as u
     >>> expected = np.full((6, 4, 5), 1e5) * u.electron
-    >>> raw = integrate(expected, duration=1 * u.min, seed=1, flat=np.ones((4, 5)),
-    ...                 dark=0 * u.electron, progress=False)
+    >>> raw = integrate(expected, duration=1 * u.min, seed=1, flat=False, dark=False,
+    ...                 progress=False)
     >>> raw.data.shape, raw.frames_per_plane.tolist()
     ((6, 4, 5), [600, 600, 600, 600, 600, 600])
     >>> expected_dn = 600 * 1e5 / 33 / 8
     >>> bool(np.all(np.abs(raw.data / expected_dn - 1) < 1e-3))
     True
+    >>> exact = integrate(np.full((6, 4, 5), 33e3) * u.electron, duration=1 * u.min, flat=False,
+    ...                   dark=False, photon_noise=False, read_noise=False, dither=False,
+    ...                   truncation=False, progress=False)
+    >>> bool(np.all(exact.data == 600 * 1000 / 8))
+    True
     """
     inst = resolve_instrument(instrument)
     if engine not in ENGINES:
         raise ValueError(f"engine must be one of {ENGINES}, got {engine!r}")
+    effects = {name: _switch(value, name) for name, value in (
+        ("photon_noise", photon_noise), ("read_noise", read_noise), ("dither", dither),
+        ("truncation", truncation))}
     values = _check_expected(expected)
     n_snap, _, ny, nx = values.shape
     schedule = frame_schedule(duration, inst)
     snap = snapshot_index(schedule.n_frames, n_snap)
     root = as_seed_sequence(seed)
-    flat_source = "synthetic" if flat is None else "user"
-    dark_source = "synthetic" if dark is None else "user"
-    flat = normalise_flat(synthetic_flat((ny, nx)) if flat is None else flat, (ny, nx))
-    dark = prepare_dark(synthetic_dark((ny, nx)) if dark is None else dark, (ny, nx))
+    flat_source, flat = _flat_map(flat, (ny, nx), inst)
+    dark_source, dark = _dark_map(dark, (ny, nx), inst)
     gain = inst.gain.to_value(u.electron / u.adu)
     sigma = inst.read_noise.to_value(u.adu)
     if not gain > 0 or sigma < 0:
         raise ValueError(f"instrument gain must be positive and read_noise non-negative, "
                          f"got {inst.gain} and {inst.read_noise}")
+    if not effects["read_noise"]:
+        sigma = 0.0
     nworkers = _workers(workers)
+    frame_dither = schedule.dither.to_value(u.adu).astype(np.int64)
+    dither_sum = schedule.dither_sum
+    if not effects["dither"]:
+        frame_dither = np.zeros_like(frame_dither)
+        dither_sum = np.zeros_like(dither_sum)
 
     if engine == "frames":
-        sums = _run_frames(values, flat, dark.to_value(u.electron), schedule, snap, gain, sigma,
-                           root, chunk_rows, nworkers, progress)
+        sums = _run_frames(values, flat, dark.to_value(u.electron), schedule, snap, frame_dither, gain,
+                           sigma, effects["photon_noise"], root, chunk_rows, nworkers, progress)
+    elif not effects["photon_noise"] and not effects["read_noise"]:
+        sums = _exact_sums(values, flat, dark.to_value(u.electron), schedule, snap, dither_sum, gain)
     else:
         if sigma < 1:
             raise ValueError(
                 f"engine='blocks' treats each frame's rounding as uniform noise, which needs "
-                f"read_noise >= 1 adu; got {inst.read_noise}. Use engine='frames'.")
-        sums = _run_blocks(values, flat, dark.to_value(u.electron), schedule, snap, gain, sigma,
-                           root, chunk_rows, nworkers, progress)
+                f"read_noise >= 1 adu; got {sigma:g} adu (read_noise={effects['read_noise']}, "
+                f"instrument read_noise {inst.read_noise}). Use engine='frames'.")
+        sums = _run_blocks(values, flat, dark.to_value(u.electron), schedule, snap, dither_sum, gain,
+                           sigma, effects["photon_noise"], root, chunk_rows, nworkers, progress)
 
     bits = inst.truncate_bits
     scale = 2.0**bits
-    dither_sum = schedule.dither_sum
-    data = (sums >> bits).astype(np.float64)
-    # A plane without frames (runs shorter than 2 LCVR states) holds an exact 0.
-    centring = np.where(schedule.frames_per_plane > 0, (scale - 1) / (2 * scale), 0.0)
-    data += (centring - dither_sum / scale)[:, None, None]
-    header = _header(schedule, engine, root, flat_source, dark_source, n_snap, inst)
+    if effects["truncation"]:
+        data = (sums >> bits).astype(np.float64)
+        # A plane without frames (runs shorter than 2 LCVR states) holds an exact 0.
+        centring = np.where(schedule.frames_per_plane > 0, (scale - 1) / (2 * scale), 0.0)
+        data += (centring - dither_sum / scale)[:, None, None]
+    else:
+        data = (sums - dither_sum[:, None, None]) / scale
+    header = _header(schedule, engine, root, flat_source, dark_source, n_snap, inst, effects,
+                     frame_dither, dither_sum)
     return RawPlanes(data=data, frames_per_plane=schedule.frames_per_plane, header=header,
                      flat=flat, dark=dark)
 
@@ -346,15 +421,15 @@ def _frame_segments(schedule, snap):
     return start, snap[start[:-1]].astype(np.int64)
 
 
-def _run_frames(values, flat, dark, schedule, snap, gain, sigma, root, chunk_rows, workers, progress):
+def _run_frames(values, flat, dark, schedule, snap, dither, gain, sigma, photon, root, chunk_rows, workers,
+                progress):
     import numba
 
-    from gongsynth.stages.camera._kernels import frames_kernel
+    from gongsynth.stages.camera.kernels import frames_kernel
 
     n_snap, _, ny, nx = values.shape
     seg_start, seg_snap = _frame_segments(schedule, snap)
     plane = schedule.plane.astype(np.int64)
-    dither = schedule.dither.to_value(u.adu).astype(np.int64)
     key0, key1 = child_sequence(root, "camera-frames").generate_state(2, dtype=np.uint64)
     sums = np.empty((N_PLANES, ny, nx), dtype=np.int64)
     previous = numba.get_num_threads()
@@ -366,7 +441,7 @@ def _run_frames(values, flat, dark, schedule, snap, gain, sigma, root, chunk_row
                 lam = (values[:, :, r0:r1] * flat[None, :, r0:r1] + dark[r0:r1]).reshape(
                     n_snap, N_PLANES, npix)
                 out = np.empty((N_PLANES, npix), dtype=np.int64)
-                frames_kernel(lam, seg_start, seg_snap, plane, dither, 1.0 / gain, sigma,
+                frames_kernel(lam, seg_start, seg_snap, plane, dither, 1.0 / gain, sigma, photon,
                               key0, key1, np.int64(r0 * nx), out)
                 sums[:, r0:r1] = out.reshape(N_PLANES, r1 - r0, nx)
                 bar.update(r1 - r0)
@@ -375,14 +450,39 @@ def _run_frames(values, flat, dark, schedule, snap, gain, sigma, root, chunk_row
     return sums
 
 
-def _run_blocks(values, flat, dark, schedule, snap, gain, sigma, root, chunk_rows, workers, progress):
+def _snapshot_counts(schedule, snap, n_snap):
+    """Frames of each (snapshot, plane), int64 (n_snap, 6)."""
+    counts = np.zeros((n_snap, N_PLANES), dtype=np.int64)
+    np.add.at(counts, (snap, schedule.plane), 1)
+    return counts
+
+
+def _exact_sums(values, flat, dark, schedule, snap, dither_sum, gain):
+    """
+    Plane sums without photon or read noise: Σ_k round(λ_k / g) + Σd_k, exactly.
+
+    Each frame's electrons are their mean λ = f E + D, so its rounding is
+    deterministic and a snapshot's frames on a plane all round alike: the
+    frames engine's arithmetic (λ × (1/g), then floor(x + 0.5)) times the
+    frame count.
+    """
+    counts = _snapshot_counts(schedule, snap, values.shape[0])
+    inv_gain = 1.0 / gain
+    sums = np.zeros((N_PLANES,) + values.shape[2:], dtype=np.int64)
+    for s, lam in enumerate(values):
+        adu = np.floor((lam * flat + dark) * inv_gain + 0.5).astype(np.int64)
+        sums += counts[s][:, None, None] * adu
+    return sums + dither_sum[:, None, None]
+
+
+def _run_blocks(values, flat, dark, schedule, snap, dither_sum, gain, sigma, photon, root, chunk_rows,
+                workers, progress):
     n_snap, _, ny, nx = values.shape
     # Frames of each (snapshot, plane): Σλ over a plane is Σ_snap count × λ_snap.
-    counts = np.zeros((n_snap, N_PLANES), dtype=np.float64)
-    np.add.at(counts, (snap, schedule.plane), 1)
+    counts = _snapshot_counts(schedule, snap, n_snap).astype(np.float64)
     frames = schedule.frames_per_plane.astype(np.float64)
     spread = np.sqrt(frames * sigma**2 + np.maximum(frames - 1, 0) / 12.0)[:, None]
-    offset = schedule.dither_sum[:, None]
+    offset = dither_sum[:, None]
     sums = np.empty((N_PLANES, ny, nx), dtype=np.int64)
 
     def work(rows):
@@ -392,7 +492,7 @@ def _run_blocks(values, flat, dark, schedule, snap, gain, sigma, root, chunk_row
         for row in range(r0, r1):
             # One generator per detector row: independent of chunking and threads.
             rng = stage_generator(root, "camera-blocks", row)
-            total = rng.poisson(lam[:, row - r0])
+            total = rng.poisson(lam[:, row - r0]) if photon else lam[:, row - r0]
             noise = rng.standard_normal((N_PLANES, nx))
             sums[:, row] = np.floor(total / gain + spread * noise + 0.5).astype(np.int64) + offset
         return r1 - r0
@@ -409,7 +509,7 @@ def _run_blocks(values, flat, dark, schedule, snap, gain, sigma, root, chunk_row
     return sums
 
 
-def _header(schedule, engine, root, flat_source, dark_source, n_snap, inst):
+def _header(schedule, engine, root, flat_source, dark_source, n_snap, inst, effects, dither, dither_sum):
     from gongsynth.version import version as __version__
 
     header = fits.Header()
@@ -433,14 +533,19 @@ def _header(schedule, engine, root, flat_source, dark_source, n_snap, inst):
     header["NSNAP"] = (n_snap, "input snapshots spread over the observation")
     header["GAIN"] = (inst.gain.to_value(u.electron / u.adu), "[e-/adu]")
     header["RDNOISE"] = (inst.read_noise.to_value(u.adu), "[adu] read noise per frame")
-    header["TRUNCBIT"] = (inst.truncate_bits, "low bits dropped after accumulation")
+    header["TRUNCBIT"] = (inst.truncate_bits, "1 DN = 2**TRUNCBIT adu (if TRUNCATE)")
     scale = 2**inst.truncate_bits
-    header["TRUNCOFF"] = ((scale - 1) / (2 * scale), "[DN] added back: mean truncation bias")
-    header["DITHMEAN"] = (float(schedule.dither.to_value(u.adu).mean()), "[adu] mean dither per frame")
-    header["FLATSRC"] = (flat_source, "flat field: synthetic default or user")
-    header["DARKSRC"] = (dark_source, "dark map: synthetic default or user")
+    offset = (scale - 1) / (2 * scale) if effects["truncation"] else 0.0
+    header["TRUNCOFF"] = (offset, "[DN] added back: mean truncation bias")
+    header["DITHMEAN"] = (float(dither.mean()) if dither.size else 0.0, "[adu] mean dither per frame")
+    header["PHOTNOIS"] = (effects["photon_noise"], "Poisson photon and dark noise drawn")
+    header["READNOIS"] = (effects["read_noise"], "read noise added")
+    header["DITHER"] = (effects["dither"], "dither added to the frames (and removed)")
+    header["TRUNCATE"] = (effects["truncation"], "low bits dropped after accumulation")
+    header["FLATSRC"] = (flat_source, "flat field: synthetic default, user or none")
+    header["DARKSRC"] = (dark_source, "dark map: synthetic default, user or none")
     for p in range(N_PLANES):
         header[f"PLANE{p}"] = (PLANE_NAMES[p], f"plane {p}")
         header[f"NFRAME{p}"] = (int(schedule.frames_per_plane[p]), f"frames in plane {p}")
-        header[f"DITHSUM{p}"] = (int(schedule.dither_sum[p]), f"[adu] dither summed in plane {p}")
+        header[f"DITHSUM{p}"] = (int(dither_sum[p]), f"[adu] dither summed in plane {p}")
     return header

@@ -25,7 +25,6 @@ Run time is ~6 µs per on-disk sample (synthesis plus filters): ~60 s for the
 6× or 25× faster; the counts then differ from the default by 0.75 % or 2.3 %
 rms (see `full_disk_scene`).
 """
-import math
 import warnings
 
 import astropy.units as u
@@ -104,8 +103,8 @@ class _Synthesiser:
         self.wavelength, self.mueller, self.inst = wavelength, mueller, inst
 
     def __call__(self, iy, ix, mu, azimuth):
-        from gongsynth.sun.photosphere import synthesize
         from gongsynth.stages.channels import channel_images
+        from gongsynth.sun.photosphere import synthesize
         columns = self.photosphere[iy[None, :], ix[None, :]]
         cube = synthesize(columns, mu=mu[None, :], los_azimuth=azimuth[None, :] * u.deg,
                           wavelength=self.wavelength, instrument=self.inst)

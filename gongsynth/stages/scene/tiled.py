@@ -10,9 +10,10 @@ better resolution; ``resolutions=(1,)`` gives a uniform GONG-resolution
 field.  The tile is foreshortened by μ = cos(latitude − B0) along the
 north-south axis and placed with its centre at heliographic (Stonyhurst)
 latitude ``pointing.latitude`` on the central meridian, seen from Earth at
-``pointing.obstime`` (`~gongsynth.geometry.Pointing`).  The WCS is true for resolution 1.  Angles follow from the
-physical size of the tile and the distance from the observer to the tile
-centre (≈ 722 km per arcsec at disk centre).
+``pointing.obstime`` (`~gongsynth.geometry.Pointing`).  The WCS is true for
+resolution 1.  Angles follow from the physical size of the tile and the
+distance from the observer to the tile centre (≈ 722 km per arcsec at disk
+centre).
 
 Resampling the tile onto the sky grid averages the tile's bilinear
 interpolant over each sky pixel's footprint.  This low-pass filter avoids
@@ -173,7 +174,8 @@ def tile(stack, pixel_size: u.km, *, pointing=None, resolutions=(1, 2, 4, 8), in
     if min(extent) < plate:
         raise ValueError(
             f"the tile ({ny}×{nx} columns of pixel_size {pixel_size:g}) spans only "
-            f"{extent[0]:.3g}″ × {extent[1]:.3g}″ on the sky at latitude {pointing.latitude:g} (μ = {mu:.3g}): "
+            f"{extent[0]:.3g}″ × {extent[1]:.3g}″ on the sky at latitude {pointing.latitude:g} "
+            f"(μ = {mu:.3g}): "
             f"smaller than one {plate:g}″ detector pixel"
         )
     out = _tile_stack(values, pix, grid, scale.to_value(u.arcsec), kpa, mu,

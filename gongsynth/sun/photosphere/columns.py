@@ -11,8 +11,8 @@ import numbers
 import astropy.units as u
 import numpy as np
 
-from gongsynth.validation import check_quantity
 from gongsynth.geometry import check_geometry, los_basis
+from gongsynth.validation import check_quantity
 
 __all__ = ["Photosphere"]
 

@@ -45,8 +45,8 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from gongsynth.seeding import as_seed_sequence, stage_generator
-from gongsynth.validation import check_quantity
 from gongsynth.sun.photosphere.columns import Photosphere
+from gongsynth.validation import check_quantity
 
 __all__ = ["model_photosphere"]
 

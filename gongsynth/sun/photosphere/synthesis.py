@@ -24,13 +24,13 @@ import astropy.units as u
 import numpy as np
 from scipy.special import wofz
 
+from gongsynth.geometry import check_geometry, los_basis
 from gongsynth.instrument import GONGInstrument
-from gongsynth.sun.stokes import RADIANCE_UNIT, StokesCube
-from gongsynth.validation import check_wavelength_grid
 from gongsynth.sun.photosphere._kernel import me_kernel, voigt_table
 from gongsynth.sun.photosphere.columns import Photosphere
-from gongsynth.geometry import check_geometry, los_basis
 from gongsynth.sun.photosphere.line import NiLine
+from gongsynth.sun.stokes import RADIANCE_UNIT, StokesCube
+from gongsynth.validation import check_wavelength_grid
 
 __all__ = ["synthesize", "default_wavelength", "zeeman_splitting"]
 

@@ -1,5 +1,5 @@
 """
-Numba kernels of the frame-by-frame camera engine (private).
+Numba kernels of the frame-by-frame camera engine and its samplers.
 
 Random numbers come from one stream per pixel: pixel ``i`` (its index in the
 full detector, row-major) gets its own xoshiro256** state, seeded by SplitMix64
@@ -150,7 +150,7 @@ def _normal_rare(s, r):
 
 @njit(inline="always")
 def _log_factorial(k):
-    """log k! (Stirling series beyond k = 9, |error| < 1e-12)."""
+    """Log k! (Stirling series beyond k = 9, |error| < 1e-12)."""
     if k < 9.0:
         return math.lgamma(k + 1.0)
     x = k + 1.0
@@ -268,7 +268,7 @@ def _poisson_rare(s, c, p, g, u):
 
 
 @njit(parallel=True, cache=True)
-def frames_kernel(lam, seg_start, seg_snap, plane, dither, inv_gain, sigma, key0, key1, first, out):
+def frames_kernel(lam, seg_start, seg_snap, plane, dither, inv_gain, sigma, photon, key0, key1, first, out):
     """
     Accumulate every frame of every pixel of a chunk.
 
@@ -286,7 +286,11 @@ def frames_kernel(lam, seg_start, seg_snap, plane, dither, inv_gain, sigma, key0
     inv_gain : float
         1 / gain, ADU per electron.
     sigma : float
-        Read noise, ADU.
+        Read noise, ADU (0 for none: the normal variate is still drawn, so the
+        stream is that of any other σ).
+    photon : bool
+        Draw the electrons of each frame from Poisson(λ); False uses λ itself
+        (no photon or dark-current noise).
     key0, key1 : uint64
         Seed keys.
     first : int64
@@ -305,11 +309,16 @@ def frames_kernel(lam, seg_start, seg_snap, plane, dither, inv_gain, sigma, key0
         acc = np.zeros(n_planes, np.int64)
         for j in range(seg_snap.size):
             snap = seg_snap[j]
-            for p in range(n_planes):
-                _poisson_constants(lam[snap, p, i], const, p, cdf, guide, TABLE_MAX_LAM)
+            if photon:
+                for p in range(n_planes):
+                    _poisson_constants(lam[snap, p, i], const, p, cdf, guide, TABLE_MAX_LAM)
             for k in range(seg_start[j], seg_start[j + 1]):
                 p = plane[k]
-                x = _poisson(state, const, p, cdf, guide) * inv_gain + sigma * _normal(state)
+                if photon:
+                    n = _poisson(state, const, p, cdf, guide)
+                else:
+                    n = lam[snap, p, i]
+                x = n * inv_gain + sigma * _normal(state)
                 acc[p] += np.int64(math.floor(x + 0.5)) + dither[k]
         for p in range(n_planes):
             out[p, i] = acc[p]

@@ -1,0 +1,99 @@
+"""
+Will a run fit?  Its memory estimated from the configuration, before anything is computed.
+"""
+import os
+
+import astropy.units as u
+
+__all__ = ["CannotRunHereError", "available_memory", "check_resources", "estimate_memory"]
+
+
+class CannotRunHereError(RuntimeError):
+    """A run this machine cannot do (it would need more memory than is available)."""
+
+
+#: Bytes of one frame's row in the camera's frame schedule, with temporaries.
+_SCHEDULE_BYTES_PER_FRAME = 80
+#: Wavelengths of the built-in synthesis (the paper's 51-point grid).
+_N_WAVELENGTHS = 51
+
+
+def estimate_memory(config):
+    """
+    An upper estimate of the peak memory a run needs, from its configuration alone.
+
+    The terms are the run's largest arrays: the Stokes cube of the built-in
+    photosphere (float32, twice for temporaries), the supersampled scene (six
+    float64 planes plus the truth, with the FFT work arrays of the optics), the
+    detector-sized camera and product arrays, and the camera's frame schedule.
+    The factors were set from the measured peak of runs at several sizes
+    (see the performance page) so that the estimate stays above it.
+
+    Parameters
+    ----------
+    config : `~gongsynth.config.SimulationConfig`
+
+    Returns
+    -------
+    `~astropy.units.Quantity`
+        In bytes.
+
+    Examples
+    --------
+    >>> from gongsynth.config import SimulationConfig
+    >>> bool(2 < estimate_memory(SimulationConfig(seed=0)).to_value(u.GB) < 8)
+    True
+    """
+    inst = config.instrument
+    columns = config.photosphere_shape[0] * config.photosphere_shape[1]
+    stokes = 2 * 4 * 4 * _N_WAVELENGTHS * columns + 200 * columns  # cube twice + photosphere fields
+    if config.mode == "full-disk":
+        stokes = 200 * columns  # synthesised in chunks at every point's own mu
+    grid = (config.detector_pixels * inst.supersampling) ** 2
+    scene = 8 * grid * (7 + 2 * 4)  # 6 planes + truth, float64, and complex FFT work arrays
+    detector = 8 * config.detector_pixels ** 2 * 40
+    frames = int((config.duration * inst.frame_rate).to_value(u.one))
+    schedule = _SCHEDULE_BYTES_PER_FRAME * frames
+    return (stokes + scene + detector + schedule + 300e6) * u.byte  # + the loaded libraries
+
+
+def available_memory():
+    """
+    Memory available to a new run (Linux ``MemAvailable``; else physical memory free).
+
+    Returns
+    -------
+    `~astropy.units.Quantity` or None
+        In bytes; None where it cannot be found.
+    """
+    try:
+        with open("/proc/meminfo") as meminfo:
+            for line in meminfo:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024 * u.byte
+    except OSError:
+        pass
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE") * u.byte
+    except (ValueError, OSError, AttributeError):
+        return None
+
+
+def check_resources(config):
+    """
+    Refuse, before computing, a run that cannot fit in this machine's memory.
+
+    Parameters
+    ----------
+    config : `~gongsynth.config.SimulationConfig`
+
+    Raises
+    ------
+    CannotRunHereError
+        With the estimate and the available memory.
+    """
+    need, have = estimate_memory(config), available_memory()
+    if have is not None and need > have:
+        raise CannotRunHereError(
+            f"this run needs about {need.to(u.GB):.1f} of memory but {have.to(u.GB):.1f} is available: "
+            f"use a smaller detector_shape or photosphere_shape, or a shorter duration")
