@@ -206,6 +206,10 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False):
     """
     progress = progress and interactive()
     inst = config.instrument
+    effects = config.effects
+    for name, given in (("flat", flat), ("dark", dark)):
+        if given is not None and given is not True and not getattr(effects, name):
+            raise ValueError(f"a user {name} was given but effects.{name} is off: give one or the other")
     pointing = Pointing(config.latitude, config.obstime)
     stages = Chain()
 
@@ -260,19 +264,24 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False):
                             "the planes tiled on the sky at the pointing"))
 
     def optics_stage(light, truth_scene):
-        counts = optics.expected_counts(light, inst, workers=config.workers)
+        counts = optics.expected_counts(light, inst, psf=effects.psf, seeing=effects.seeing,
+                                        workers=config.workers)
         truth = truth_psf = None
         if truth_scene is not None:
             truth = optics.observe(truth_scene.data, truth_scene.pixel_scale, instrument=inst,
                                    psf=False, boundary=truth_scene.boundary)
             truth_psf = optics.observe(truth_scene.data, truth_scene.pixel_scale, instrument=inst,
+                                       psf=effects.psf, seeing=effects.seeing,
                                        boundary=truth_scene.boundary, workers=config.workers)
         return {"expected_counts": counts, "truth": truth, "truth_psf": truth_psf}
 
     def camera(expected_counts):
         return {"raw": integrate(expected_counts, duration=config.duration, engine=config.engine,
                                  seed=child_sequence(config.seed, "camera"), instrument=inst,
-                                 flat=flat, dark=dark, workers=config.workers, progress=progress)}
+                                 flat=flat if effects.flat else False, dark=dark if effects.dark else False,
+                                 photon_noise=effects.photon_noise, read_noise=effects.read_noise,
+                                 dither=effects.dither, truncation=effects.truncation,
+                                 workers=config.workers, progress=progress)}
 
     def reduction(raw, expected_counts):
         return {"observables": reduce(raw, inst), "sky": unmeasured(expected_counts, config)}
