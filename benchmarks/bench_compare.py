@@ -24,7 +24,7 @@ from astropy.coordinates import SkyCoord
 from sunpy.coordinates import frames
 
 from gongsynth import GONGInstrument
-from gongsynth.analysis.compare import _overlap_operator, degrade_to_gong
+from gongsynth.analysis.degrade import degrade_to_gong, overlap_operator
 from gongsynth.analysis.statistics import disk_coordinates
 from gongsynth.stages.optics import psf_kernel
 
@@ -59,8 +59,8 @@ def baseline(smap, kernel, plate):
     conv = np.where(valid & (den > 1e-6), num / np.where(den > 1e-6, den, 1), np.nan)
     scale = smap.scale.axis1.to_value(u.arcsec / u.pix)
     crpix = smap.reference_pixel
-    wx = _overlap_operator(data.shape[1], scale, crpix.x.value, plate)[0].toarray()
-    wy = _overlap_operator(data.shape[0], scale, crpix.y.value, plate)[0].toarray()
+    wx = overlap_operator(data.shape[1], scale, crpix.x.value, plate)[0].toarray()
+    wy = overlap_operator(data.shape[0], scale, crpix.y.value, plate)[0].toarray()
     ok = np.isfinite(conv)
     total = wy @ np.where(ok, conv, 0.0) @ wx.T
     cover = wy @ ok.astype(float) @ wx.T

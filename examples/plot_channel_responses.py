@@ -21,10 +21,10 @@ from gongsynth.stages.filters import (
     channel_responses,
     channel_weights,
     lyot_transmission,
-    measured_phase,
     modulation_amplitude,
     prefilter_transmission,
 )
+from gongsynth.stages.reduction import measured_phase
 
 gong = GONGInstrument()
 lam0 = gong.line_wavelength

@@ -28,14 +28,12 @@ from astropy.io import fits
 from matplotlib.colors import Normalize
 
 import gongsynth
-from gongsynth.analysis.compare import (
-    compare,
-    degrade_to_gong,
-    limb_darkening,
-    load_observation,
-    noise_estimate,
-)
-from gongsynth.analysis.statistics import disk_coordinates
+from gongsynth.analysis.compare import compare
+from gongsynth.analysis.degrade import degrade_to_gong
+from gongsynth.analysis.disk import disk_coordinates
+from gongsynth.analysis.limb import limb_darkening
+from gongsynth.analysis.noise import noise_estimate
+from gongsynth.analysis.observations import load_observation
 
 
 def real_data_folder():

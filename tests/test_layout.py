@@ -171,3 +171,32 @@ def test_public_dotted_paths_of_the_design():
         module = importlib.import_module(dotted)
         assert hasattr(module, attribute), f"{dotted}.{attribute}"
     assert importlib.import_module("gongsynth.filters") is importlib.import_module("gongsynth.stages.filters")
+
+
+def _outside_sources():
+    """Python files outside the package that import it: gallery, benchmarks, docs extensions."""
+    root = PACKAGE.parent
+    folders = ("examples", "benchmarks", "docs/_ext")
+    return sorted(p for folder in folders for p in (root / folder).glob("*.py"))
+
+
+@pytest.mark.skipif(not (PACKAGE.parent / "examples").is_dir(), reason="needs a source checkout")
+@pytest.mark.parametrize("path", _outside_sources(), ids=lambda p: f"{p.parent.name}/{p.name}")
+def test_gallery_and_benchmark_imports_resolve(path):
+    # The gallery runs only when the docs are built: a name moved in the
+    # package must not break an example unnoticed until then.
+    import importlib
+
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("gongsynth"):
+            module = importlib.import_module(node.module)
+            for alias in node.names:
+                submodule = hasattr(module, "__path__") and importlib.util.find_spec(
+                    f"{node.module}.{alias.name}") is not None
+                where = f"{path.name}: {node.module}.{alias.name}"
+                assert hasattr(module, alias.name) or submodule, f"{where} does not exist"
+                assert not alias.name.startswith("_"), f"{where} is private"
+        elif isinstance(node, ast.Import):
+            for alias in node.names:
+                if alias.name.startswith("gongsynth"):
+                    importlib.import_module(alias.name)
