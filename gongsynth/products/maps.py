@@ -76,6 +76,10 @@ def product_header(shape, *, centre, scale, product, instrument=None, duration=N
     ...                    extra={"seed": ("1", "root random seed")})
     >>> h["content"], h["bunit"], h["dtype"], h["seed"]
     ('DOPPLERGRAM', 'm s-1', 'SIMULATED', '1')
+    >>> h = product_header((8, 8), centre=centre, scale=2.5 * u.arcsec, product="magnetogram",
+    ...                    duration=10 * u.min)
+    >>> h["date-beg"], h["date-end"], h["xposure"], round(h["exptime"], 5)
+    ('2019-06-07T00:20:00.000', '2019-06-07T00:30:00.000', 600.0, 0.01667)
     """
     content, unit = _product(product)
     inst = resolve_instrument(instrument)
@@ -83,14 +87,20 @@ def product_header(shape, *, centre, scale, product, instrument=None, duration=N
     header["origin"] = "gongsynth"
     header["dtype"] = "SIMULATED"
     header["content"] = content
+    header["detector"] = "simulated GONG camera"
     header["gsvers"] = __version__
+    header["exptime"] = float(inst.exposure_time.to_value(u.s))
+    comments = dict(header.get("keycomments", {}))
+    comments["EXPTIME"] = "[s] exposure of one camera frame"
     if duration is not None:
         start = centre.obstime
         header["date-beg"] = start.isot
         header["date-avg"] = (start + duration / 2).isot
         header["date-end"] = (start + duration).isot
-        header["xposure"] = u.Quantity(duration).to_value(u.s)
-    comments = dict(header.get("keycomments", {}))
+        # Frames follow each other without gaps: accumulated exposure = frames x exposure.
+        frames = (u.Quantity(duration) * inst.frame_rate).to_value(u.one)
+        header["xposure"] = float(frames * inst.exposure_time.to_value(u.s))
+        comments["XPOSURE"] = "[s] accumulated exposure of all frames"
     for key, value in (extra or {}).items():
         if isinstance(value, tuple):
             value, comments[key.upper()] = value
