@@ -169,6 +169,8 @@ class GONGInstrument:
         polarisation's phase lies within this of ±π, 0.3 rad (≈ 650 m/s,
         ≈ 450 G; design §3.5).
 
+    Notes
+    -----
     The synthetic flat and dark are illustrative GONG-like maps (no real GONG
     flat or dark is public): see `gongsynth.stages.camera.detector`.
 
