@@ -69,3 +69,22 @@ def test_noiseless_psf_free_factor_is_the_line_physics(latitude):
     # intensity weighting inside the pixel), which the strong-field fit shows.
     assert curve.all_pixels.slope == pytest.approx(0.988, abs=0.02)
     assert 0.85 < curve.strong.slope < curve.quiet.slope
+
+
+def test_curves_as_tables():
+    from gongsynth.analysis.calibration import latitude_table
+
+    rng = np.random.default_rng(3)
+    truth = rng.normal(0, 300, 5000)
+    curves = [calibration_curve(f * truth * u.G + rng.normal(0, 5, truth.size) * u.G, truth * u.G,
+                                n_boot=20, seed=2, label=f"x{f}") for f in (0.5, 0.9)]
+    table = curves[0].to_table()
+    assert table["median"].unit == u.G and len(table) == curves[0].bin_centres.size
+    assert np.array_equal(table["n_pixels"], curves[0].counts)
+    assert table.meta["all_pixels"]["correction_factor"] == pytest.approx(2.0, rel=0.01)
+    sweep = latitude_table([0, 60] * u.deg, curves)
+    assert sweep["latitude"].unit == u.deg
+    assert list(sweep["slope_all"]) == [c.all_pixels.slope for c in curves]
+    assert sweep["correction_all"][1] == pytest.approx(1 / 0.9, rel=0.01)
+    with pytest.raises(ValueError, match="one entry per curve"):
+        latitude_table([0] * u.deg, curves)

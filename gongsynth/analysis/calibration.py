@@ -15,11 +15,12 @@ from dataclasses import dataclass
 
 import astropy.units as u
 import numpy as np
+from astropy.table import QTable
 
 from gongsynth.seeding import stage_generator
 
 __all__ = ["CalibrationFit", "CalibrationCurve", "robust_slope", "calibration_curve",
-           "calibration_vs_latitude"]
+           "calibration_vs_latitude", "latitude_table"]
 
 
 def _values(data, name):
@@ -150,6 +151,26 @@ class CalibrationCurve:
     truth: np.ndarray
     measured: np.ndarray
     label: str = ""
+
+    def to_table(self):
+        """
+        The binned curve as a table, the fits in its ``meta``.
+
+        Returns
+        -------
+        `~astropy.table.QTable`
+            Columns ``true`` (bin centre), ``median``, ``p16``, ``p84`` (G) and
+            ``n_pixels``; ``meta`` holds ``label``, ``threshold`` and, for
+            ``all_pixels``, ``strong`` and ``quiet``, the slope, its error, the
+            scatter and the correction factor.
+        """
+        meta = {"label": self.label, "threshold": self.threshold}
+        for name in ("all_pixels", "strong", "quiet"):
+            fit = getattr(self, name)
+            meta[name] = {"slope": fit.slope, "slope_error": fit.slope_error, "scatter": fit.scatter,
+                          "n_pixels": fit.n_pixels, "correction_factor": fit.correction_factor}
+        return QTable({"true": self.bin_centres, "median": self.median, "p16": self.p16,
+                       "p84": self.p84, "n_pixels": np.asarray(self.counts)}, meta=meta)
 
     def plot(self, ax=None, *, max_points=20000):
         """
@@ -314,6 +335,10 @@ def calibration_vs_latitude(results, **kwargs):
         The latitude of each result (deg).
     curves : list of `CalibrationCurve`
 
+    See Also
+    --------
+    latitude_table : the fits of these curves as one table.
+
     Examples
     --------
     >>> import astropy.units as u
@@ -329,3 +354,44 @@ def calibration_vs_latitude(results, **kwargs):
     curves = [calibration_curve(r, **kwargs) for r in results]
     latitude = u.Quantity([r.config.latitude for r in results]).to(u.deg)
     return latitude, curves
+
+
+def latitude_table(latitude, curves):
+    """
+    The calibration of a latitude sweep as one table: a row per latitude.
+
+    Parameters
+    ----------
+    latitude : `~astropy.units.Quantity`
+        Latitude of each curve (as returned by `calibration_vs_latitude`).
+    curves : sequence of `CalibrationCurve`
+
+    Returns
+    -------
+    `~astropy.table.QTable`
+        ``latitude`` (deg) and, for each fit (``all``, ``strong``, ``quiet``):
+        ``slope_<fit>`` (measured / true), ``slope_error_<fit>``,
+        ``correction_<fit>`` (true / measured) and ``n_pixels_<fit>``.
+
+    Examples
+    --------
+    >>> import astropy.units as u
+    >>> t = np.linspace(-300, 300, 2001)
+    >>> curves = [calibration_curve(f * t * u.G, t * u.G, n_boot=5) for f in (0.5, 0.8)]
+    >>> table = latitude_table([0, 60] * u.deg, curves)
+    >>> [round(float(c), 3) for c in table["correction_all"]]
+    [2.0, 1.25]
+    """
+    latitude = u.Quantity(latitude, u.deg)
+    if latitude.shape != (len(curves),):
+        raise ValueError(f"latitude must have one entry per curve ({len(curves)}), "
+                         f"got shape {latitude.shape}")
+    columns = {"latitude": latitude}
+    for fit_name, column in (("all_pixels", "all"), ("strong", "strong"), ("quiet", "quiet")):
+        fits = [getattr(c, fit_name) for c in curves]
+        columns[f"slope_{column}"] = [f.slope for f in fits]
+        columns[f"slope_error_{column}"] = [f.slope_error for f in fits]
+        columns[f"correction_{column}"] = [f.correction_factor for f in fits]
+        columns[f"n_pixels_{column}"] = [f.n_pixels for f in fits]
+    threshold = curves[0].threshold if curves else None
+    return QTable(columns, meta={"threshold": threshold})
