@@ -12,6 +12,7 @@ import sys
 
 from gongsynth.analysis import calibration, compare
 from gongsynth.analysis.observations import load_observation
+from gongsynth.analysis.weak_flux import weak_flux_factor
 from gongsynth.instrument import GONGInstrument
 from gongsynth.pipeline import SimulationResult, simulate, simulate_many
 from gongsynth.products.maps import GONGSynthMap  # registers the map source with sunpy.map.Map
@@ -34,4 +35,4 @@ del _name, _module
 
 __all__ = ["GONGInstrument", "GONGSynthMap", "SimulationResult", "StokesCube", "calibration",
            "compare", "filters", "load_observation", "photosphere", "reduction", "simulate",
-           "simulate_many", "__citation__", "__version__"]
+           "simulate_many", "weak_flux_factor", "__citation__", "__version__"]

@@ -20,11 +20,24 @@ from astropy.table import QTable
 from gongsynth.seeding import stage_generator
 
 __all__ = ["CalibrationFit", "CalibrationCurve", "robust_slope", "calibration_curve",
-           "calibration_vs_latitude", "latitude_table"]
+           "calibration_vs_latitude", "latitude_table",
+           "gauss_values"]
 
 
-def _values(data, name):
-    """Plain float array (G) from a Map, Quantity or array."""
+def gauss_values(data, name):
+    """
+    Plain float array in G from a Map, Quantity (convertible to G) or array (taken as G).
+
+    Parameters
+    ----------
+    data : `~sunpy.map.GenericMap`, `~astropy.units.Quantity` or array_like
+    name : str
+        Named in the error for a unit that is not a flux density.
+
+    Returns
+    -------
+    `numpy.ndarray`
+    """
     if hasattr(data, "data") and hasattr(data, "meta"):  # a sunpy Map
         data = u.Quantity(data.data, data.unit) if data.unit is not None else data.data
     if isinstance(data, u.Quantity):
@@ -281,8 +294,8 @@ def calibration_curve(measured, truth=None, *, mask=None, threshold: u.G = 100 *
             select = np.asarray(gong_resolution) == 1
             mask = select if mask is None else (np.asarray(mask) & select)
         label = label or f"latitude {result.config.latitude:.0f}"
-    m = _values(measured, "measured")
-    t = _values(truth, "truth")
+    m = gauss_values(measured, "measured")
+    t = gauss_values(truth, "truth")
     if m.shape != t.shape:
         raise ValueError(f"measured and truth must have the same shape, got {m.shape} and {t.shape}")
     keep = np.isfinite(m) & np.isfinite(t)
