@@ -11,6 +11,7 @@ files) and `gongsynth.analysis` (real data, comparison, calibration).
 import sys
 
 from gongsynth.analysis import calibration, compare
+from gongsynth.analysis.apply_calibration import calibrate
 from gongsynth.analysis.observations import load_observation
 from gongsynth.analysis.weak_flux import weak_flux_factor
 from gongsynth.instrument import GONGInstrument
@@ -33,6 +34,6 @@ for _name, _module in {"filters": filters, "reduction": reduction, "compare": co
     sys.modules[f"{__name__}.{_name}"] = _module
 del _name, _module
 
-__all__ = ["GONGInstrument", "GONGSynthMap", "SimulationResult", "StokesCube", "calibration",
+__all__ = ["GONGInstrument", "GONGSynthMap", "SimulationResult", "StokesCube", "calibrate", "calibration",
            "compare", "filters", "load_observation", "photosphere", "reduction", "simulate",
            "simulate_many", "weak_flux_factor", "__citation__", "__version__"]

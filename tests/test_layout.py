@@ -32,7 +32,8 @@ LAYERS = (
     ("gongsynth.stages.reduction",),
     ("gongsynth.products",),
     ("gongsynth.analysis",),
-    ("gongsynth.config", "gongsynth.chain", "gongsynth.resources", "gongsynth.pipeline"),
+    ("gongsynth.config", "gongsynth.chain", "gongsynth.resources", "gongsynth.pipeline",
+     "gongsynth.calibration_sweep"),
     ("gongsynth.cli",),
 )
 
@@ -176,7 +177,7 @@ def test_public_dotted_paths_of_the_design():
 def _outside_sources():
     """Python files outside the package that import it: gallery, benchmarks, docs extensions."""
     root = PACKAGE.parent
-    folders = ("examples", "benchmarks", "docs/_ext")
+    folders = ("examples", "benchmarks", "docs/_ext", "scripts")
     return sorted(p for folder in folders for p in (root / folder).glob("*.py"))
 
 

@@ -43,7 +43,7 @@ from gongsynth.analysis.calibration import gauss_values
 from gongsynth.seeding import stage_generator
 
 __all__ = ["PAPER_BINS", "QUIET_LIMIT", "FluxConservingCurve", "WeakFluxFactor",
-           "flux_conserving_fit", "paper_regions", "weak_flux_factor"]
+           "flux_conserving_fit", "paper_bins", "paper_regions", "region_pixels", "weak_flux_factor"]
 
 #: The authors' numbers of bins per viewing angle (deg): (quiet Sun, sunspot).
 PAPER_BINS = {0: (35, 21), 25: (21, 9), 45: (15, 7), 60: (9, 7), 70: (7, 7), 75: (7, 7)}
@@ -268,19 +268,78 @@ def paper_regions(magnetogram, continuum, *, latitude=0 * u.deg, usable=None):
     return calm & ~sunspot, sunspot
 
 
-def weak_flux_factor(result, *, region="quiet", n_bins=None, min_outer=400, n_boot=50, block=4, seed=0,
+def region_pixels(result, region="quiet", *, psf=True):
+    """
+    Measured and true B_LOS of one region of a simulation, with each pixel's position.
+
+    Parameters
+    ----------
+    result : `~gongsynth.pipeline.SimulationResult`
+        A simulation with its truth (tiled mode: only the 1× part of the field is used).
+    region : {"quiet", "sunspot"}
+        See `paper_regions`.
+    psf : bool
+        The truth through the PSF (``truth_psf``, default) or pixel-averaged (``truth``).
+
+    Returns
+    -------
+    measured, truth : `numpy.ndarray`
+        In G, one value per pixel of the region.
+    rows, columns : `numpy.ndarray` of int
+        The pixels' positions.
+    """
+    if region not in ("quiet", "sunspot"):
+        raise ValueError(f"region must be 'quiet' or 'sunspot', got {region!r}")
+    truth = result.truth_psf if psf else result.truth
+    if truth is None:
+        raise ValueError("this result has no ground truth (its input cube had no blos)")
+    resolution = getattr(result, "resolution_map", None)
+    usable = None if resolution is None else np.asarray(resolution) == 1
+    quiet, sunspot = paper_regions(result.magnetogram, result.continuum, latitude=result.config.latitude,
+                                   usable=usable)
+    m, t = gauss_values(result.magnetogram, "magnetogram"), gauss_values(truth, "truth")
+    rows, columns = np.nonzero((quiet if region == "quiet" else sunspot) & np.isfinite(t))
+    return m[rows, columns], t[rows, columns], rows, columns
+
+
+def paper_bins(latitude, region="quiet"):
+    """
+    The authors' number of bins for the tabulated angle nearest ``latitude``.
+
+    Parameters
+    ----------
+    latitude : `~astropy.units.Quantity`
+    region : {"quiet", "sunspot"}
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> import astropy.units as u
+    >>> paper_bins(0 * u.deg), paper_bins(58 * u.deg, "sunspot")
+    (35, 7)
+    """
+    angle = u.Quantity(latitude, u.deg).to_value(u.deg)
+    nearest = min(PAPER_BINS, key=lambda tabulated: abs(tabulated - angle))
+    return PAPER_BINS[nearest][0 if region == "quiet" else 1]
+
+
+def weak_flux_factor(results, *, region="quiet", n_bins=None, min_outer=400, n_boot=50, block=4, seed=0,
                      psf=True):
     """
     The weak-flux calibration factor of a simulation, as papers II/III estimate it.
 
     Parameters
     ----------
-    result : `~gongsynth.pipeline.SimulationResult`
-        A simulation with its truth (tiled mode: the 1× part of the field is used).
+    results : `~gongsynth.pipeline.SimulationResult` or sequence of them
+        Simulations with their truth at one latitude (several seeds are
+        pooled into one fit; tiled mode: the 1× part of the field is used).
     region : {"quiet", "sunspot"}
         Which curve (see `paper_regions`).
     n_bins : int, optional
-        Default: the authors' number for the nearest tabulated angle (`PAPER_BINS`).
+        Default: the authors' number for the nearest tabulated angle (`paper_bins`).
     min_outer : int
         Fewest pixels in each outer bin.
     n_boot : int
@@ -298,40 +357,39 @@ def weak_flux_factor(result, *, region="quiet", n_bins=None, min_outer=400, n_bo
     -------
     `WeakFluxFactor`
     """
-    if region not in ("quiet", "sunspot"):
-        raise ValueError(f"region must be 'quiet' or 'sunspot', got {region!r}")
-    truth = result.truth_psf if psf else result.truth
-    if truth is None:
-        raise ValueError("this result has no ground truth (its input cube had no blos)")
-    latitude = u.Quantity(result.config.latitude, u.deg)
-    if n_bins is None:
-        nearest = min(PAPER_BINS, key=lambda angle: abs(angle - latitude.to_value(u.deg)))
-        n_bins = PAPER_BINS[nearest][0 if region == "quiet" else 1]
-    resolution = getattr(result, "resolution_map", None)
-    usable = None if resolution is None else np.asarray(resolution) == 1
-    quiet, sunspot = paper_regions(result.magnetogram, result.continuum, latitude=latitude, usable=usable)
-    chosen = quiet if region == "quiet" else sunspot
-    m, t = gauss_values(result.magnetogram, "magnetogram"), gauss_values(truth, "truth")
-    chosen &= np.isfinite(t)
-    curve = flux_conserving_fit(m[chosen], t[chosen], n_bins, min_outer=min_outer)
+    results = [results] if hasattr(results, "magnetogram") else list(results)
+    if not results:
+        raise ValueError("results is empty")
+    latitude = u.Quantity(results[0].config.latitude, u.deg)
+    if any(u.Quantity(r.config.latitude, u.deg) != latitude for r in results):
+        raise ValueError("pooled results must share one latitude, got "
+                         f"{[str(r.config.latitude) for r in results]}")
+    n_bins = paper_bins(latitude, region) if n_bins is None else n_bins
+    measured, truth, labels = [], [], []
+    for number, result in enumerate(results):
+        m, t, rows, columns = region_pixels(result, region, psf=psf)
+        measured.append(m)
+        truth.append(t)
+        # Bootstrap blocks never span two runs.
+        labels.append((number * 100_003 + rows // block) * 100_003 + columns // block)
+    m, t, labels = np.concatenate(measured), np.concatenate(truth), np.concatenate(labels)
+    curve = flux_conserving_fit(m, t, n_bins, min_outer=min_outer)
 
     # Block bootstrap: resample whole blocks of pixels with replacement.
-    ys, xs = np.nonzero(chosen)
-    labels = (ys // block) * (chosen.shape[1] // block + 1) + xs // block
-    blocks, inverse = np.unique(labels, return_inverse=True)
+    _, inverse = np.unique(labels, return_inverse=True)
     members = np.argsort(inverse, kind="stable")
-    starts = np.searchsorted(inverse[members], np.arange(blocks.size + 1))
+    starts = np.searchsorted(inverse[members], np.arange(inverse.max() + 2))
+    n_blocks = starts.size - 1
     rng = stage_generator(seed, "weak-flux-bootstrap")
-    mv, tv = m[ys, xs], t[ys, xs]
     factors = []
     for _ in range(n_boot):
-        picked = rng.integers(0, blocks.size, blocks.size)
+        picked = rng.integers(0, n_blocks, n_blocks)
         index = np.concatenate([members[starts[k]:starts[k + 1]] for k in picked])
         try:
-            resampled = flux_conserving_fit(mv[index], tv[index], n_bins, min_outer=min_outer)
+            resampled = flux_conserving_fit(m[index], t[index], n_bins, min_outer=min_outer)
         except ValueError:  # a resample too small for the bins: skip it
             continue
         factors.append(resampled.slope_at_zero)
     uncertainty = float(np.std(factors, ddof=1)) if len(factors) > 1 else float("nan")
     return WeakFluxFactor(factor=curve.slope_at_zero, uncertainty=uncertainty, curve=curve, region=region,
-                          n_pixels=int(chosen.sum()), latitude=latitude)
+                          n_pixels=int(m.size), latitude=latitude)

@@ -1,0 +1,47 @@
+"""
+Build the calibration table shipped with gongsynth (``gongsynth/data/calibration_default.ecsv``).
+
+What it runs: the default `gongsynth.simulate` configuration (the built-in
+model photosphere with Milne-Eddington spectra, GONG's 860 x 860 detector,
+10-minute integrations, blocks camera engine) at the papers' viewing
+latitudes 0, 25, 45, 60, 70 and 75 deg, each with root seeds 1 and 2, and fits
+the papers' quiet-Sun and sunspot curves
+(`gongsynth.calibration_sweep.build_calibration_table`, 50 bootstrap resamples).
+
+How to regenerate it (about 15 minutes on 2 cores)::
+
+    python scripts/build_default_calibration_table.py --overwrite
+
+Same gongsynth version, same seeds: the same numbers, bit for bit (only the
+``created`` date in the metadata differs).  The table's numbers describe the
+built-in Sun; they will change when a more realistic input Sun (3-D
+atmospheres through radiative transfer) becomes the default.
+"""
+import argparse
+from pathlib import Path
+
+import astropy.units as u
+
+from gongsynth.analysis.calibration_table import DEFAULT_TABLE, TABLE_LATITUDES, write_calibration_table
+from gongsynth.calibration_sweep import build_calibration_table
+
+SEEDS = (1, 2)
+
+
+def main(argv=None):
+    """Build the table and write it (refusing to overwrite unless asked)."""
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[1])
+    parser.add_argument("--out", type=Path,
+                        default=Path(__file__).resolve().parents[1] / "gongsynth" / "data" / DEFAULT_TABLE)
+    parser.add_argument("--overwrite", action="store_true")
+    args = parser.parse_args(argv)
+    table = build_calibration_table(TABLE_LATITUDES, seeds=SEEDS, n_boot=50, progress=True)
+    write_calibration_table(table, args.out, overwrite=args.overwrite)
+    for row in table:
+        print(f"{row['latitude'].to_value(u.deg):4.0f} deg  {row['region']:8s} "
+              f"factor {row['factor']:.3f} +- {row['uncertainty']:.3f}  ({row['n_pixels']} px)")
+    print(f"wrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()

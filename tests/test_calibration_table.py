@@ -1,0 +1,116 @@
+"""Calibration tables: building, saving, reading and applying them."""
+import astropy.units as u
+import numpy as np
+import pytest
+import sunpy.map
+from astropy.coordinates import SkyCoord
+from sunpy.coordinates import frames
+
+from gongsynth.analysis.apply_calibration import calibrate, viewing_angle, weak_flux_factor_map
+from gongsynth.analysis.calibration_table import (
+    calibration_table,
+    read_calibration_table,
+    table_curve,
+    write_calibration_table,
+)
+from gongsynth.analysis.weak_flux import WeakFluxFactor, flux_conserving_fit
+
+
+def _known_table(factors):
+    """A table whose quiet-Sun curves are exactly truth = factor × measured."""
+    t = np.random.default_rng(0).normal(0, 100, 20_000)
+    fits = [WeakFluxFactor(f, 0.0, flux_conserving_fit(t / f, t, 9), "quiet", t.size, lat * u.deg)
+            for lat, f in factors.items()]
+    return calibration_table(fits, mu=[np.cos(np.deg2rad(lat)) for lat in factors], metadata={"x": 1})
+
+
+def _disk_map(values, scale=20):
+    ref = SkyCoord(0 * u.arcsec, 0 * u.arcsec, frame=frames.Helioprojective,
+                   observer="earth", obstime="2020-01-01")
+    header = sunpy.map.make_fitswcs_header(values.shape, ref, scale=[scale, scale] * u.arcsec / u.pix,
+                                           unit=u.G)
+    return sunpy.map.Map(values, header)
+
+
+def test_round_trip_through_ecsv(tmp_path):
+    table = _known_table({0: 2.0, 60: 1.0})
+    path = tmp_path / "table.ecsv"
+    write_calibration_table(table, path)
+    with pytest.raises(FileExistsError):
+        write_calibration_table(table, path)
+    back = read_calibration_table(path)
+    assert back["latitude"].unit == u.deg and back["nodes"].unit == u.G
+    assert back.meta["x"] == 1 and back.meta["source"] == str(path)
+    curve = table_curve(back, 60 * u.deg)
+    assert np.allclose(curve(np.array([-50.0, 10.0])).to_value(u.G), [-50.0, 10.0], atol=1e-6)
+    with pytest.raises(KeyError, match="sunspot"):
+        table_curve(back, 60 * u.deg, "sunspot")
+
+
+def test_calibrate_interpolates_in_viewing_angle():
+    table = _known_table({0: 2.0, 60: 1.0})
+    values = np.full((101, 101), 10.0)
+    smap = _disk_map(values)
+    theta = viewing_angle(smap).to_value(u.deg)
+    out = calibrate(smap, table=table)
+    on = np.isfinite(theta)
+    # Linear in θ between 0° (×2) and 60° (×1), the 60° curve beyond.
+    expected = 10.0 * np.where(theta[on] < 60, 2.0 - theta[on] / 60, 1.0)
+    assert np.allclose(out.data[on], expected, rtol=1e-6)
+    assert np.all(np.isnan(out.data[~on]))
+    assert out.meta["caltable"] == "in-memory table"
+    factors = weak_flux_factor_map(smap, table=table)
+    assert np.allclose(factors.data[on], expected / 10.0, rtol=1e-9)
+
+
+def test_strong_pixels_use_the_sunspot_curve():
+    quiet = _known_table({0: 2.0})
+    t = np.random.default_rng(1).normal(0, 1000, 20_000)
+    spot = WeakFluxFactor(1.5, 0.0, flux_conserving_fit(t / 1.5, t, 9), "sunspot", t.size, 0 * u.deg)
+    table = calibration_table([*[WeakFluxFactor(f, 0, table_curve(quiet, 0 * u.deg), "quiet", 1, 0 * u.deg)
+                                 for f in (2.0,)], spot], mu=[1, 1])
+    smap = _disk_map(np.array([[100.0, 1000.0]]), scale=1)
+    out = calibrate(smap, table=table)
+    assert out.data[0, 0] == pytest.approx(200.0, rel=1e-6)   # quiet: |B| < 400 G
+    assert out.data[0, 1] == pytest.approx(1500.0, rel=1e-6)  # strong: the sunspot curve
+
+
+def test_synoptic_maps_use_latitude_and_b0():
+    header = sunpy.map.make_fitswcs_header(
+        (90, 360), SkyCoord(0 * u.deg, 0 * u.deg, frame=frames.HeliographicCarrington,
+                            observer="earth", obstime="2020-03-06"),
+        scale=[1, 2] * u.deg / u.pix, projection_code="CAR", unit=u.G)
+    smap = sunpy.map.Map(np.ones((90, 360)), header)
+    theta = viewing_angle(smap)
+    from sunpy.coordinates import sun
+    b0 = sun.B0("2020-03-06").to_value(u.deg)
+    latitude = smap.pixel_to_world(0 * u.pix, 45 * u.pix).lat.to_value(u.deg)
+    assert theta[45, 0].to_value(u.deg) == pytest.approx(abs(latitude - b0), abs=1e-6)
+
+
+def test_a_small_sweep_builds_a_table():
+    from gongsynth.calibration_sweep import build_calibration_table
+
+    table = build_calibration_table([0, 60] * u.deg, seeds=[1, 2], regions=["quiet"], n_boot=10,
+                                    detector_shape=96, duration=1 * u.min, progress=False)
+    assert list(table["latitude"].to_value(u.deg)) == [0.0, 60.0]
+    assert table["mu"][1] == pytest.approx(0.5, abs=0.1)
+    assert np.all(table["factor"] > 0) and np.all(table["uncertainty"] > 0)
+    assert table.meta["seeds"] == [1, 2] and "[simulation]" in table.meta["config"]
+    with pytest.raises(ValueError, match="regions"):
+        build_calibration_table([0] * u.deg, regions=["plage"], progress=False)
+
+
+def test_the_shipped_table_loads_with_units_and_provenance():
+    table = read_calibration_table()
+    assert table["latitude"].unit == u.deg and table["nodes"].unit == u.G
+    assert sorted(table["latitude"].to_value(u.deg)) == sorted([0, 25, 45, 60, 70, 75] * 2)
+    assert {str(r) for r in table["region"]} == {"quiet", "sunspot"}
+    for key in ("gongsynth_version", "input_sun", "seeds", "estimator", "instrument", "config", "created"):
+        assert key in table.meta, key
+    assert np.all(np.isfinite(table["factor"])) and np.all(table["uncertainty"] > 0)
+    # Each row's curve evaluates and is odd.
+    for row in table:
+        curve = table_curve(table, row["latitude"], str(row["region"]))
+        pair = curve(np.array([-30.0, 30.0])).to_value(u.G)
+        assert pair[0] == pytest.approx(-pair[1], rel=1e-9, abs=1e-9)
