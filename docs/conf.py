@@ -23,6 +23,9 @@ matplotlib.use("Agg")  # examples must never open a window
 
 DOCS = Path(__file__).parent
 sys.path.insert(0, str(DOCS / "_ext"))
+# The gallery's real-data examples read the project's shared/data/real, kept
+# beside the repository (never in it); a user may point elsewhere.
+os.environ.setdefault("GONGSYNTH_REAL_DATA", str(DOCS.parent.parent / "shared" / "data" / "real"))
 
 import gongsynth  # noqa: E402
 

@@ -35,20 +35,8 @@ from gongsynth.analysis.limb import limb_darkening
 from gongsynth.analysis.noise import noise_estimate
 from gongsynth.analysis.observations import load_observation
 
-
-def real_data_folder():
-    """shared/data/real beside the repository, or $GONGSYNTH_REAL_DATA."""
-    if os.environ.get("GONGSYNTH_REAL_DATA"):
-        return Path(os.environ["GONGSYNTH_REAL_DATA"])
-    here = Path(globals().get("__file__", Path.cwd() / "plot_compare_real.py")).resolve().parent
-    for folder in (here, *here.parents):
-        candidate = folder / "shared" / "data" / "real"
-        if candidate.is_dir():
-            return candidate
-    raise FileNotFoundError("shared/data/real not found: set GONGSYNTH_REAL_DATA to the real-data folder")
-
-
-REAL = real_data_folder()
+# The real files: the project's shared/data/real (the docs build sets the variable).
+REAL = Path(os.environ.get("GONGSYNTH_REAL_DATA", "shared/data/real"))
 
 # %%
 # The real observation
