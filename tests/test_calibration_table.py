@@ -114,3 +114,17 @@ def test_the_shipped_table_loads_with_units_and_provenance():
         curve = table_curve(table, row["latitude"], str(row["region"]))
         pair = curve(np.array([-30.0, 30.0])).to_value(u.G)
         assert pair[0] == pytest.approx(-pair[1], rel=1e-9, abs=1e-9)
+
+
+def test_weak_flux_of_a_calibrated_map_grows_by_the_tables_factor():
+    # Fields far weaker than the central bins' width: each curve is linear
+    # there with slope = the weak-flux factor, so the unsigned flux grows by
+    # the |B|-weighted mean of the factor map over the disk.
+    table = read_calibration_table()
+    smap = _disk_map(np.random.default_rng(5).uniform(-2, 2, (121, 121)), scale=18)
+    out = calibrate(smap, table=table)
+    factor = weak_flux_factor_map(smap, table=table).data
+    on = np.isfinite(out.data)
+    expected = np.sum(np.abs(smap.data[on]) * factor[on]) / np.sum(np.abs(smap.data[on]))
+    assert np.abs(out.data[on]).sum() / np.abs(smap.data[on]).sum() == pytest.approx(expected, rel=1e-9)
+    assert out.meta["caltable"].endswith("calibration_default.ecsv")
