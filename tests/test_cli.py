@@ -62,3 +62,26 @@ def test_effect_switches_and_obstime_reach_the_saved_config(tmp_path):
     assert saved.effects.off == ("photon_noise", "read_noise")
     assert saved.obstime.startswith("2009-09-05T18:54")
     assert saved.replace(effects=cfg.effects, obstime=cfg.obstime) == cfg
+
+
+def test_calibrate_a_real_synoptic_map(tmp_path, capsys):
+    import numpy as np
+    import sunpy.map
+
+    from .realdata import real_file
+
+    source = real_file("gong/mrbqs221029t0304c2263_067.fits")
+    out = tmp_path / "calibrated.fits"
+    assert main(["calibrate", str(source), "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "unsigned flux, calibrated / measured" in printed
+    calibrated, original = sunpy.map.Map(out), sunpy.map.Map(source)
+    assert calibrated.data.shape == original.data.shape and calibrated.unit == original.unit
+    assert calibrated.meta["caltable"].endswith("calibration_default.ecsv")
+    both = np.isfinite(calibrated.data) & np.isfinite(original.data)
+    # The table's factors lie within 0.9-1.35: the flux changes, but boundedly.
+    ratio = np.abs(calibrated.data[both]).sum() / np.abs(original.data[both]).sum()
+    assert 0.9 < ratio < 1.35 and ratio != 1
+    # Refuses to overwrite; a missing input is a usage error.
+    assert main(["calibrate", str(source), "--out", str(out)]) == 3
+    assert main(["calibrate", str(tmp_path / "none.fits"), "--out", str(tmp_path / "x.fits")]) == 2
