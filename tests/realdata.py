@@ -43,6 +43,12 @@ SHA256 = {
         "7e2603bb803ba923d92345ee233b034735fa9a76590a619a2c5b09ba039b79e5",
     "gong/bbzqa240209t1734_dim-860.jpg":
         "5dbe557540ffb4375a58024968ed33c3c8a5ee38ae15107bde19431a045572ca",
+    "gong/bbbqa090905t1854.fits.gz":
+        "390ae520af45eb4d998b78082de308c382093f73408a843679c90a068d4badbf",
+    "gong/bbiqa090905t1854.fits.gz":
+        "a0ee9ef198b5964a5e7ce683227eb718adc2b0b43e1858f6c58359d0208497d9",
+    "gong/mrbqs221029t0304c2263_067.fits":
+        "5cef09c69b9f34e6bbe734c61ad609c99a63b2d816b77b6a521fd83b66f48fba",
 }
 
 _checked = set()

@@ -37,7 +37,7 @@ import numpy as np
 import sunpy.map
 from astropy.io import fits
 from astropy.io.fits.verify import VerifyWarning
-from sunpy.coordinates import frames
+from sunpy.coordinates import frames, sun
 
 from gongsynth.analysis.disk import disk_coordinates
 
@@ -67,7 +67,9 @@ JSOC_PROJECTIONS = {
 # Keywords that carry the observation time (any one is enough).
 _DATE_KEYS = ("date-obs", "date_obs", "t_obs", "date-avg", "date-beg")
 # Required for a GONG-format (CTYPE GONGX/GONGY) header.
-_GONG_KEYS = ("crpix1", "crpix2", "semidiam", "fndlmbmi", "fndlmbma")
+_GONG_KEYS = ("crpix1", "crpix2", "fndlmbmi", "fndlmbma")
+#: The apparent solar radius in radians: SEMIDIAM (current headers) or RADIUS (old headers).
+_GONG_RADIUS_KEYS = ("semidiam", "radius")
 # Old-style helioprojective axis names.
 _OLD_CTYPES = {"solar-x": "HPLN-TAN", "solar_x": "HPLN-TAN", "solar-y": "HPLT-TAN", "solar_y": "HPLT-TAN"}
 
@@ -141,22 +143,39 @@ def _fix_jsoc_projection(header, path, repair, notes):
 
 
 def _gong_format_to_hpc(header, notes):
-    """Give a GONG-format header (CTYPE GONGX/GONGY) that sunpy's GONG source does not claim a HPC WCS."""
-    semidiam = (float(header["SEMIDIAM"]) * u.rad).to_value(u.arcsec)
+    """
+    Give a GONG-format header (CTYPE GONGX/GONGY) that sunpy's GONG source does not claim a HPC WCS.
+
+    Both header generations: current ones give the apparent radius as
+    SEMIDIAM, old site files (e.g. Big Bear 2009, DTYPE RW, CDELT = 0) as
+    RADIUS, both in radians; FNDLMBMI/FNDLMBMA are the fitted limb's semi-axes
+    in pixels and CRPIX1/2 the disk centre.  The image is taken as solar north
+    up, as GONG's reduced images are (their PA keyword is the ephemeris P angle,
+    removed by the reduction).
+    """
+    radius_key = "SEMIDIAM" if "SEMIDIAM" in header else "RADIUS"
+    semidiam = (float(header[radius_key]) * u.rad).to_value(u.arcsec)
     header["CTYPE1"], header["CTYPE2"] = "HPLN-TAN", "HPLT-TAN"
     header["CUNIT1"], header["CUNIT2"] = "arcsec", "arcsec"
     header["CDELT1"] = semidiam / float(header["FNDLMBMI"])
     header["CDELT2"] = semidiam / float(header["FNDLMBMA"])
     header["CRVAL1"], header["CRVAL2"] = 0.0, 0.0
     header["RSUN_OBS"] = semidiam
-    if "DISTANCE" in header and "DSUN_OBS" not in header:
-        header["DSUN_OBS"] = (float(header["DISTANCE"]) * u.AU).to_value(u.m)
-        header["HGLN_OBS"] = 0.0
-        header["HGLT_OBS"] = float(header.get("B0", 0.0))
     if "TIME-OBS" in header and "T" not in str(header.get("DATE-OBS", "T")):
         date = str(header["DATE-OBS"]).strip().replace("/", "-")
         header["DATE-OBS"] = f"{date}T{str(header['TIME-OBS']).strip()}"
-    notes.append("GONG-format header (GONGX/GONGY) given a helioprojective WCS from SEMIDIAM and "
+    if "DISTANCE" in header and "DSUN_OBS" not in header:
+        # The observer is the site on Earth: the Sun's distance from the header, B0 from the
+        # header or, in old headers without it, from the ephemeris at DATE-OBS.
+        header["DSUN_OBS"] = (float(header["DISTANCE"]) * u.AU).to_value(u.m)
+        header["HGLN_OBS"] = 0.0
+        header["HGLT_OBS"] = (float(header["B0"]) if "B0" in header
+                              else sun.B0(str(header["DATE-OBS"]).strip()).to_value(u.deg))
+    if ("SKYVALUE" not in header and str(header.get("IMTYPE", "")).strip() == "MAGNETIC"
+            and "IMGMIN01" in header):
+        header["SKYVALUE"] = float(header["IMGMIN01"])  # old magnetograms: the sky is the image minimum
+        notes.append(f"sky value {header['SKYVALUE']} taken from IMGMIN01 (old GONG magnetogram)")
+    notes.append(f"GONG-format header (GONGX/GONGY) given a helioprojective WCS from {radius_key} and "
                  "FNDLMBMI/FNDLMBMA")
 
 
@@ -172,6 +191,8 @@ def _prepare_header(header, path, repair, notes):
     ctype1 = str(header.get("CTYPE1", "")).strip()
     if ctype1.upper().startswith("GONG"):
         missing = [k.upper() for k in _GONG_KEYS if k not in keys]
+        if not any(k in keys for k in _GONG_RADIUS_KEYS):
+            missing.append("SEMIDIAM (or RADIUS)")
         if not any(k in keys for k in _DATE_KEYS):
             missing.append("DATE-OBS")
         if missing:
@@ -440,8 +461,7 @@ def load_observation(path, *, kind="magnetogram", repair=True):
         smap = _with_data(smap, values, meta)
     if isinstance(smap.coordinate_frame, frames.Helioprojective):
         rho, _ = disk_coordinates(smap)
-        if str(header.get("CTYPE1", "")).upper().startswith("GONG") or _is_gong_observation(header):
-            smap = _mask_gong_sky(smap, header, step, rho)
+        smap = _mask_gong_sky(smap, header, step, rho)  # GONG files (old and new) name a SKYVALUE
         check_disk_footprint(smap, name=str(path), rho=rho)
     if notes:
         history = str(smap.meta.get("history", "")).rstrip()
