@@ -6,6 +6,7 @@ import sunpy.map
 from astropy.coordinates import SkyCoord
 from sunpy.coordinates import frames
 
+from gongsynth import GONGInstrument
 from gongsynth.analysis.apply_calibration import calibrate, viewing_angle, weak_flux_factor_map
 from gongsynth.analysis.calibration_table import (
     calibration_table,
@@ -99,6 +100,25 @@ def test_a_small_sweep_builds_a_table():
     assert table.meta["seeds"] == [1, 2] and "[simulation]" in table.meta["config"]
     with pytest.raises(ValueError, match="regions"):
         build_calibration_table([0] * u.deg, regions=["plage"], progress=False)
+    with pytest.raises(ValueError, match="preset"):
+        build_calibration_table([0] * u.deg, preset="authors", progress=False)
+
+
+def test_the_paper_preset_is_the_authors_seeing_kernel():
+    from gongsynth.calibration_sweep import PRESETS
+    from gongsynth.stages.psf import psf_profile
+
+    # exp(-r²/2σ²) with σ = 1.8″ falls to half at the FWHM: 4.24″ across.
+    fwhm = PRESETS["paper"]["seeing_fwhm"]
+    assert fwhm.to_value(u.arcsec) == pytest.approx(4.239, abs=1e-3)
+    assert np.exp(-0.5 * ((fwhm / 2).to_value(u.arcsec) / 1.8) ** 2) == pytest.approx(0.5, rel=1e-12)
+    # The seeing kernel of that instrument is wider than the default's.
+    paper = GONGInstrument().replace(**PRESETS["paper"])
+    r = [0, 3] * u.arcsec
+    ratio_paper = psf_profile(r, paper)[1] / psf_profile(r, paper)[0]
+    ratio_default = psf_profile(r, GONGInstrument())[1] / psf_profile(r, GONGInstrument())[0]
+    assert ratio_paper > ratio_default
+
 
 
 def test_the_shipped_table_loads_with_units_and_provenance():
