@@ -82,3 +82,19 @@ def test_old_magnetogram_calibrates(magnetogram, tmp_path):
     assert both.sum() > 0.9 * np.isfinite(magnetogram.data).sum()
     ratio = np.abs(calibrated.data[both]).sum() / np.abs(magnetogram.data[both]).sum()
     assert 0.9 < ratio < 1.35 and ratio != 1
+
+
+def test_rice_compressed_copy_reads_the_same(magnetogram, tmp_path):
+    # The GONG archive also serves Rice-compressed .fits.fz files, the image
+    # (16-bit integers with BSCALE) in the first extension.
+    with fits.open(real_file(MAGNETOGRAM), do_not_scale_image_data=True) as hdul:
+        raw, header = hdul[0].data.copy(), hdul[0].header.copy()
+    compressed = fits.CompImageHDU(raw, header, compression_type="RICE_1")
+    compressed.header["BSCALE"], compressed.header["BZERO"] = header["BSCALE"], header["BZERO"]
+    path = tmp_path / "bbbqa090905t1854.fits.fz"
+    fits.HDUList([fits.PrimaryHDU(), compressed]).writeto(path)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", fits.verify.VerifyWarning)
+        copy = gongsynth.load_observation(path)
+    assert np.array_equal(copy.data, magnetogram.data, equal_nan=True)
+    assert copy.wcs.wcs.compare(magnetogram.wcs.wcs)
