@@ -1,0 +1,218 @@
+r"""
+Equation of state: electron density, hydrogen density, gas pressure and density in LTE.
+
+The gas is the elements of `~gongsynth.sun.rt.atomic_data.ELEMENTS` in the
+Asplund et al. (2009) proportions, each nucleus a free particle, each element
+ionised once at most (Saha equation with the Kurucz partition functions):
+
+.. math:: \frac{n_{\rm II}\, n_e}{n_{\rm I}} = \Phi(T) =
+          2\,\frac{U_{\rm II}}{U_{\rm I}}\Big(\frac{2\pi m_e kT}{h^2}\Big)^{3/2} e^{-\chi/kT},
+          \qquad n_e = n_{\rm H}\sum_m A_m \frac{\Phi_m}{n_e + \Phi_m}
+
+solved per point by a safeguarded Newton iteration in ln n_e.  Left out (and so
+documented): H⁻ and H₂ (H₂ binds < 1 % of hydrogen above 4000 K; H⁻ holds ~1e-7
+of it), second ionisations (relevant only above ~10⁴ K, where Ni I has no
+opacity), and the turbulent pressure.  Gas pressure is P = (n_H ΣA_m + n_e) kT.
+"""
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from gongsynth.sun.rt.atomic_data import (
+    ABUNDANCE,
+    ATOMIC_MASS,
+    ELEMENTS,
+    IONISATION_EV,
+    LOG_PARTITION,
+    PF_CAP,
+    PF_TEMPERATURE,
+)
+
+__all__ = ["K_BOLTZMANN", "AMU", "MEAN_MASS_PER_H", "PARTICLES_PER_H", "saha_phi", "electron_density",
+           "solve_state", "hydrogen_ionised_fraction"]
+
+#: Boltzmann constant (erg/K) and atomic mass unit (g), CODATA 2018.
+K_BOLTZMANN = 1.380649e-16
+AMU = 1.66053907e-24
+_EV_K = 11604.518          # K per eV
+_SAHA = 4.829389e15        # 2 (2π m_e k / h²)^{3/2}, cm⁻³ K^{-3/2}
+
+#: Mass per hydrogen nucleus in amu, Σ A_m m_m.
+MEAN_MASS_PER_H = float(sum(ABUNDANCE[e] * ATOMIC_MASS[e] for e in ELEMENTS))
+#: Nuclei per hydrogen nucleus, Σ A_m.
+PARTICLES_PER_H = float(sum(ABUNDANCE[e] for e in ELEMENTS))
+
+_CHUNK = 1 << 20
+
+
+def _log_u(species, ln_t):
+    cap = math.log(PF_CAP.get(species, 20000.0))
+    return np.interp(np.minimum(ln_t, cap), np.log(PF_TEMPERATURE), np.asarray(LOG_PARTITION[species]))
+
+
+def saha_phi(element, temperature):
+    """
+    Saha factor Φ = n_II n_e / n_I of an element (cm⁻³).
+
+    Parameters
+    ----------
+    element : str
+        Element symbol, e.g. ``"Ni"``.
+    temperature : `numpy.ndarray`
+        Temperature (K).
+
+    Returns
+    -------
+    `numpy.ndarray`
+        Φ(T) in cm⁻³.
+
+    Examples
+    --------
+    >>> f"{float(saha_phi('H', 6000.0)):.3e}"          # n_p n_e / n_HI at 6000 K
+    '4.246e+09'
+    """
+    t = np.maximum(np.asarray(temperature, dtype=np.float64), 1000.0)
+    ln_t = np.log(t)
+    ratio = 10.0 ** (_log_u(element + "II", ln_t) - _log_u(element + "I", ln_t))
+    return _SAHA * ratio * t ** 1.5 * np.exp(-IONISATION_EV[element] * _EV_K / t)
+
+
+def hydrogen_ionised_fraction(temperature, electron_density):
+    """
+    n_p / n_H from the Saha equation at the given electron density.
+
+    Parameters
+    ----------
+    temperature : `numpy.ndarray`
+        K.
+    electron_density : `numpy.ndarray`
+        cm⁻³.
+
+    Returns
+    -------
+    `numpy.ndarray`
+    """
+    phi = saha_phi("H", temperature)
+    return phi / (phi + np.asarray(electron_density, dtype=np.float64))
+
+
+@nb.njit(parallel=True, cache=True)
+def _solve_ne(phi, abund, nh_or_ntot, from_pressure, sum_a, out):
+    """Newton in ln n_e, bracketed; phi (nel, n)."""
+    nel, n = phi.shape
+    for p in nb.prange(n):
+        q = nh_or_ntot[p]
+        hi = q if from_pressure else q * sum_a
+        lo = hi * 1e-30
+        x = math.log(hi * 1e-3)
+        for _ in range(200):
+            ne = math.exp(x)
+            nh = (q - ne) / sum_a if from_pressure else q
+            s = 0.0
+            ds = 0.0
+            for m in range(nel):
+                den = ne + phi[m, p]
+                s += abund[m] * phi[m, p] / den
+                ds += abund[m] * phi[m, p] / (den * den)
+            f = ne - nh * s
+            if f > 0.0:
+                hi = min(hi, ne)
+            else:
+                lo = max(lo, ne)
+            fp = 1.0 + nh * ds + (s / sum_a if from_pressure else 0.0)
+            step = f / (fp * ne)
+            xn = x - step
+            if not (math.log(lo) < xn < math.log(hi)):
+                xn = 0.5 * (math.log(lo) + math.log(hi))
+            if abs(xn - x) < 1e-11:
+                x = xn
+                break
+            x = xn
+        out[p] = math.exp(x)
+
+
+def electron_density(temperature, *, hydrogen_density=None, gas_pressure=None):
+    """
+    LTE electron density from T and either the hydrogen density or the gas pressure.
+
+    Parameters
+    ----------
+    temperature : array_like
+        K.
+    hydrogen_density : array_like, optional
+        Total hydrogen nuclei per cm³.
+    gas_pressure : array_like, optional
+        dyn cm⁻² (give exactly one of the two).
+
+    Returns
+    -------
+    `numpy.ndarray`
+        n_e in cm⁻³ (float64, the shape of ``temperature``).
+
+    Examples
+    --------
+    >>> ne = electron_density(6000.0, gas_pressure=1.0e5)
+    >>> f"{float(ne):.2e}"
+    '2.88e+13'
+    """
+    if (hydrogen_density is None) == (gas_pressure is None):
+        raise ValueError("give exactly one of hydrogen_density and gas_pressure")
+    t = np.asarray(temperature, dtype=np.float64)
+    from_pressure = gas_pressure is not None
+    q = (np.asarray(gas_pressure, dtype=np.float64) / (K_BOLTZMANN * t) if from_pressure
+         else np.asarray(hydrogen_density, dtype=np.float64))
+    t, q = np.broadcast_arrays(t, q)
+    shape = t.shape
+    t, q = t.reshape(-1), q.reshape(-1)
+    if not (np.isfinite(t).all() and np.isfinite(q).all() and (t > 0).all() and (q > 0).all()):
+        raise ValueError("temperature and density/pressure must be finite and positive")
+    abund = np.array([ABUNDANCE[e] for e in ELEMENTS])
+    out = np.empty(t.size)
+    for start in range(0, t.size, _CHUNK):
+        sl = slice(start, start + _CHUNK)
+        phi = np.stack([saha_phi(e, t[sl]) for e in ELEMENTS])
+        _solve_ne(phi, abund, np.ascontiguousarray(q[sl]), from_pressure, PARTICLES_PER_H, out[sl])
+    return out.reshape(shape)
+
+
+def solve_state(temperature, *, gas_pressure=None, density=None, electron_density_=None):
+    """
+    Complete the thermodynamic state: (P, ρ, n_e, n_H) from T and P or ρ (n_e optional).
+
+    Parameters
+    ----------
+    temperature : array_like
+        K.
+    gas_pressure : array_like, optional
+        dyn cm⁻².
+    density : array_like, optional
+        g cm⁻³ (at least one of P and ρ).
+    electron_density_ : array_like, optional
+        cm⁻³; when given it is kept and only the missing quantities are derived.
+
+    Returns
+    -------
+    dict
+        ``gas_pressure``, ``density``, ``electron_density``, ``hydrogen_density`` (float64, cgs).
+    """
+    t = np.asarray(temperature, dtype=np.float64)
+    if gas_pressure is None and density is None:
+        raise ValueError("the state needs the gas pressure or the density")
+    if density is not None:
+        nh = np.asarray(density, dtype=np.float64) / (AMU * MEAN_MASS_PER_H)
+        ne = (electron_density(t, hydrogen_density=nh) if electron_density_ is None
+              else np.asarray(electron_density_, dtype=np.float64))
+        p = ((nh * PARTICLES_PER_H + ne) * K_BOLTZMANN * t if gas_pressure is None
+             else np.asarray(gas_pressure, dtype=np.float64))
+    else:
+        p = np.asarray(gas_pressure, dtype=np.float64)
+        ne = (electron_density(t, gas_pressure=p) if electron_density_ is None
+              else np.asarray(electron_density_, dtype=np.float64))
+        nh = (p / (K_BOLTZMANN * t) - ne) / PARTICLES_PER_H
+        if (nh <= 0).any():
+            raise ValueError("the electron density exceeds the particle density P/kT somewhere")
+    rho = nh * AMU * MEAN_MASS_PER_H if density is None else np.asarray(density, dtype=np.float64)
+    return {"gas_pressure": p, "density": rho, "electron_density": ne, "hydrogen_density": nh}

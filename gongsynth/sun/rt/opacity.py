@@ -1,0 +1,279 @@
+r"""
+Continuum and Ni I line opacity in LTE (cgs), as numba point functions and numpy wrappers.
+
+Continuum at wavelength λ (per cm, stimulated emission included):
+
+* H⁻ bound-free and free-free: John (1988, A&A 193, 189) fits, with the H⁻
+  population from the Saha equation (binding 0.754 eV);
+* H I bound-free from levels n = 3..8 (hydrogenic cross-section, Gaunt factor 1;
+  levels above 8 by Gray's integral) and H I free-free (Gaunt factor 1);
+* Thomson scattering on electrons and Rayleigh scattering on H I (Dalgarno's
+  fit as in Kurucz's ATLAS); scattering is counted as absorption with the LTE
+  source function (S = B).
+
+Metal bound-free opacity is left out (< 1 % at 677 nm in the photosphere).
+
+Line: the Ni I lower-level population from Saha–Boltzmann with the line's
+partition functions, the integrated cross-section π e²/(m_e c²) λ₀² f, Doppler
+width from temperature and microturbulence, Voigt damping from radiative, van
+der Waals (Unsöld) and quadratic Stark widths exactly as RH and Lightweaver
+compute them.  `line_constants` packs what the kernels need into one array.
+"""
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from gongsynth.sun.rt.atomic_data import ABUNDANCE, IONISATION_EV, NiLineData
+
+__all__ = ["line_constants", "point_opacity", "column_opacity", "continuum_opacity", "line_opacity",
+           "planck", "LC_SIZE"]
+
+_H = 6.62607015e-27
+_C = 2.99792458e10
+_K = 1.380649e-16
+_EV_K = 11604.518
+_SAHA_HALF = 2.4146830e15            # (2π m_e k / h²)^{3/2}
+_PI_RE = 8.85280e-13                 # π e² / (m_e c²), cm
+_SQRT_PI = math.sqrt(math.pi)
+_AMU = 1.66053907e-24
+
+#: Length of the array returned by `line_constants`.
+LC_SIZE = 16
+_PF_LNT = np.linspace(math.log(1000.0), math.log(20000.0), 300)
+
+
+def line_constants(line=None):
+    """
+    The Ni I line's constants in one float64 array (the kernels' input).
+
+    Parameters
+    ----------
+    line : `~gongsynth.sun.rt.atomic_data.NiLineData`, optional
+        Atomic data (default `NiLineData()`).
+
+    Returns
+    -------
+    constants : `numpy.ndarray`
+        (LC_SIZE,): λ₀ (cm), gf/g_l·(π e²/m_e c²)λ₀², g_l, E_l (eV), Ni abundance,
+        χ_Ni (eV), mass (g), γ_rad, van der Waals and Stark coefficients, Landé g.
+    pf_table : `numpy.ndarray`
+        (2, 300) log U of Ni I and Ni II on a uniform ln T grid 1000–20 000 K.
+    """
+    line = NiLineData() if line is None else line
+    lam = line.wavelength_nm * 1e-7
+    # Unsöld van der Waals (RH / Lightweaver form, SI constants, result for n_HI in cm⁻³).
+    q, eps4, a0, hp, ryd = 1.60217663e-19, 4 * math.pi * 8.8541878128e-12, 5.29177211e-11, 6.62607015e-34, \
+        2.1798724e-18
+    e_cont = line.ion_ground_cm * 1.98644586e-23
+    e_up = line.upper_energy_cm * 1.98644586e-23
+    e_lo = line.lower_energy_cm * 1.98644586e-23
+    delta_r = (ryd / (e_cont - e_up)) ** 2 - (ryd / (e_cont - e_lo)) ** 2
+    c625 = (2.5 * q * q / eps4 * 7.42e-41 / eps4 * 2 * math.pi * a0 ** 2 / hp * delta_r) ** 0.4
+    mass = line.mass_amu
+    vrel_h = (8.0 * 1.380649e-23 / (math.pi * 1.66053907e-27 * mass) * (1.0 + mass / 1.007975)) ** 0.3
+    vrel_he = (8.0 * 1.380649e-23 / (math.pi * 1.66053907e-27 * mass) * (1.0 + mass / 4.002602)) ** 0.3
+    vdw = 8.08 * line.vdw_enhancement * (vrel_h + ABUNDANCE["He"] * vrel_he) * c625 * 1e6   # n in cm⁻³
+    # Quadratic Stark (RH / Lightweaver).
+    e_ryd = ryd / (1.0 + 9.1093837e-31 / (mass * 1.66053907e-27))
+    n_l = math.sqrt(e_ryd / (e_cont - e_lo))
+    n_u = math.sqrt(e_ryd / (e_cont - e_up))
+    c4 = q * q / eps4 * a0 * (2 * math.pi * a0 ** 2 / hp) / 18.0 * (
+        (n_u * (5 * n_u ** 2 + 1)) ** 2 - (n_l * (5 * n_l ** 2 + 1)) ** 2)
+    cstark = 11.37 * (line.stark_enhancement * abs(c4)) ** (2.0 / 3.0)
+    cm = (1.0 + mass / (9.1093837e-31 / 1.66053907e-27)) ** (1 / 6) + (1.0 + mass / 28.0) ** (1 / 6)
+    stark = cstark * cm * (8.0 * 1.380649e-23 / (math.pi * 1.66053907e-27 * mass)) ** (1 / 6) * 1e6
+    chi = IONISATION_EV[line.element] if line.partition_levels is None else line.ionisation_ev
+    const = np.zeros(LC_SIZE)
+    const[:12] = (lam, _PI_RE * lam * lam * line.oscillator_strength, line.g_lower, line.lower_energy_ev,
+                  ABUNDANCE[line.element], chi, mass * _AMU, line.gamma_rad, vdw, stark, line.lande_g,
+                  line.wavelength_nm)
+    u1, u2 = line.partition_functions(np.exp(_PF_LNT))
+    return const, np.ascontiguousarray(np.log(np.stack([u1, u2])))
+
+
+@nb.njit(cache=True, inline="always")
+def planck(lam_cm, t):
+    """Planck function B_λ (erg s⁻¹ cm⁻² sr⁻¹ cm⁻¹) at λ (cm) and T (K)."""
+    return 2.0 * _H * _C * _C / lam_cm ** 5 / math.expm1(_H * _C / (lam_cm * _K * t))
+
+
+@nb.njit(cache=True)
+def _continuum(lam_cm, t, ne, nh):
+    """Continuum opacity (cm⁻¹) and the H I density at one point."""
+    kt_ev = t / _EV_K
+    phi_h = _SAHA_HALF * t ** 1.5 * math.exp(-13.5984 / kt_ev)        # U_HII/U_HI · 2 = 1
+    n_hi = nh * ne / (ne + phi_h)
+    n_p = nh - n_hi
+    lam_um = lam_cm * 1e4
+    stim = -math.expm1(-_H * _C / (lam_cm * _K * t))
+    # H- bound-free (John 1988).
+    kappa = 0.0
+    if lam_um < 1.6419:
+        x = 1.0 / lam_um - 1.0 / 1.6419
+        s = math.sqrt(x)
+        series = 152.519 + s * (49.534 + s * (-118.858 + s * (92.536 + s * (-34.194 + s * 4.982))))
+        sigma = 1e-18 * lam_um ** 3 * x * s * series
+        n_hm = n_hi * ne * 1.0353e-16 * t ** -1.5 * math.exp(0.754195 / kt_ev)
+        kappa += sigma * n_hm * stim
+    # H- free-free (John 1988, λ > 0.3645 µm), per H I atom per unit electron pressure.
+    theta = 5040.0 / t
+    ff = 0.0
+    a_ = (0.0, 2483.346, -3449.889, 2200.040, -696.271, 88.283)
+    b_ = (0.0, 285.827, -1158.382, 2427.719, -1841.400, 444.517)
+    c_ = (0.0, -2054.291, 8746.523, -13651.105, 8624.970, -1863.864)
+    d_ = (0.0, 2827.776, -11485.632, 16755.524, -10051.530, 2095.288)
+    e_ = (0.0, -1341.537, 5303.609, -7510.494, 4400.067, -901.788)
+    f_ = (0.0, 208.952, -812.939, 1132.738, -655.020, 132.985)
+    il = 1.0 / lam_um
+    for n in range(6):
+        ff += theta ** ((n + 2) / 2.0) * (lam_um * lam_um * a_[n] + b_[n] + il * (c_[n] + il * (
+            d_[n] + il * (e_[n] + il * f_[n]))))
+    kappa += 1e-29 * ff * n_hi * ne * _K * t
+    # H I bound-free from n = 3..8 plus the integral above 8 (Gray 2005, eq. 8.8), Gaunt factor 1.
+    nu = _C / lam_cm
+    e_ph = _H * nu / 1.602176634e-12
+    sigma0 = 2.815e29 / nu ** 3
+    hbf = 0.0
+    for n in range(1, 9):
+        if 13.5984 / (n * n) < e_ph:
+            hbf += sigma0 / n ** 5 * 2.0 * n * n / 2.0 * math.exp(-13.5984 * (1.0 - 1.0 / (n * n)) / kt_ev)
+    hbf += sigma0 * kt_ev / (2.0 * 13.5984) * (math.exp(-13.5984 * (1.0 - 1.0 / 81.0) / kt_ev)
+                                               - math.exp(-13.5984 / kt_ev))
+    kappa += hbf * n_hi * stim
+    # H I free-free.
+    kappa += 3.69e8 / (nu ** 3 * math.sqrt(t)) * ne * n_p * stim
+    # Thomson and Rayleigh (Dalgarno) scattering.
+    lam_a = lam_cm * 1e8
+    l2 = 1.0 / (lam_a * lam_a)
+    sig_r = l2 * l2 * (5.799e-13 + l2 * (1.422e-6 + l2 * 2.784))
+    kappa += 6.6524587e-25 * ne + sig_r * n_hi
+    return kappa, n_hi
+
+
+@nb.njit(cache=True)
+def point_opacity(t, ne, nh, vturb, const, pf_table):
+    """
+    Continuum opacity, line strength, Doppler width, damping and Planck function at one point.
+
+    Parameters
+    ----------
+    t, ne, nh, vturb : float
+        Temperature (K), electron and hydrogen densities (cm⁻³), microturbulence (cm/s).
+    const, pf_table : `numpy.ndarray`
+        From `line_constants`.
+
+    Returns
+    -------
+    tuple of float
+        κ_c (cm⁻¹), κ_L (cm⁻¹, line-centre opacity of an undamped line: multiply
+        by H(a, v)), Δλ_D (cm), a, B_λ(λ₀).
+    """
+    lam = const[0]
+    kc, n_hi = _continuum(lam, t, ne, nh)
+    kt_ev = t / _EV_K
+    x = (math.log(min(max(t, 1000.0), 20000.0)) - _PF_LNT[0]) / (_PF_LNT[1] - _PF_LNT[0])
+    i = min(int(x), _PF_LNT.size - 2)
+    w = x - i
+    ln_u1 = pf_table[0, i] * (1 - w) + pf_table[0, i + 1] * w
+    ln_u2 = pf_table[1, i] * (1 - w) + pf_table[1, i + 1] * w
+    phi = 2.0 * _SAHA_HALF * t ** 1.5 * math.exp(ln_u2 - ln_u1 - const[5] / kt_ev)
+    n_el = nh * const[4]
+    n_neutral = n_el * ne / (ne + phi)
+    n_low = n_neutral * const[2] * math.exp(-const[3] / kt_ev - ln_u1)
+    stim = -math.expm1(-_H * _C / (lam * _K * t))
+    dlam = lam / _C * math.sqrt(2.0 * _K * t / const[6] + vturb * vturb)
+    kl = const[1] * n_low * stim / (_SQRT_PI * dlam)
+    gamma = const[7] + const[8] * t ** 0.3 * n_hi + const[9] * t ** (1.0 / 6.0) * ne
+    dnu = _C * dlam / (lam * lam)
+    a = gamma / (4.0 * math.pi * dnu)
+    return kc, kl, dlam, a, planck(lam, t)
+
+
+def continuum_opacity(wavelength_nm, temperature, electron_density, hydrogen_density):
+    """
+    Continuum opacity (cm⁻¹) at one wavelength for arrays of points.
+
+    Parameters
+    ----------
+    wavelength_nm : float
+        Wavelength (nm), e.g. 500 for the τ₅₀₀ scale or 676.78.
+    temperature, electron_density, hydrogen_density : array_like
+        K, cm⁻³, cm⁻³.
+
+    Returns
+    -------
+    `numpy.ndarray`
+        κ_c in cm⁻¹.
+
+    Examples
+    --------
+    >>> k = continuum_opacity(500.0, 6420.0, 6.6e13, 1.17e17)    # FAL-C near tau_500 = 1
+    >>> 1e-8 < float(k) < 1e-6
+    True
+    """
+    t, ne, nh = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in
+                                      (temperature, electron_density, hydrogen_density)))
+    out = np.empty(t.shape)
+    _continuum_many(float(wavelength_nm) * 1e-7, t.reshape(-1), ne.reshape(-1), nh.reshape(-1),
+                    out.reshape(-1))
+    return out
+
+
+@nb.njit(parallel=True, cache=True)
+def _continuum_many(lam, t, ne, nh, out):
+    for p in nb.prange(t.size):
+        out[p] = _continuum(lam, t[p], ne[p], nh[p])[0]
+
+
+def line_opacity(temperature, electron_density, hydrogen_density, microturbulence=0.0, line=None):
+    """
+    Line-centre opacity scale, Doppler width and damping of Ni I for arrays of points.
+
+    Parameters
+    ----------
+    temperature, electron_density, hydrogen_density : array_like
+        K, cm⁻³, cm⁻³.
+    microturbulence : array_like, optional
+        km/s.
+    line : `~gongsynth.sun.rt.atomic_data.NiLineData`, optional
+
+    Returns
+    -------
+    dict
+        ``kappa_continuum`` and ``kappa_line`` (cm⁻¹; the line's opacity is
+        κ_L H(a, v)), ``doppler_width`` (pm), ``damping``, ``planck`` (cgs per cm).
+    """
+    const, pf = line_constants(line)
+    arrays = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in
+                                   (temperature, electron_density, hydrogen_density, microturbulence)))
+    shape = arrays[0].shape
+    flat = [np.ascontiguousarray(a.reshape(1, -1)) for a in arrays]
+    out = np.empty((5, 1, flat[0].size))
+    column_opacity(flat[0], flat[1], flat[2], flat[3] * 1e5, const, pf, *out)
+    out = out.reshape((5,) + shape)
+    return {"kappa_continuum": out[0], "kappa_line": out[1], "doppler_width": out[2] * 1e10,
+            "damping": out[3], "planck": out[4]}
+
+
+@nb.njit(parallel=True, cache=True)
+def column_opacity(temp, ne, nh, vturb, const, pf_table, kc, kl, dop, damping, source):
+    """
+    Fill (ncol, nz) arrays with `point_opacity` at every point (vturb in cm/s).
+
+    Parameters
+    ----------
+    temp, ne, nh, vturb : (ncol, nz) float64
+        K, cm⁻³, cm⁻³, cm/s.
+    const, pf_table : `numpy.ndarray`
+        From `line_constants`.
+    kc, kl, dop, damping, source : (ncol, nz) float64
+        Output: κ_c, κ_L (cm⁻¹), Δλ_D (cm), a, B_λ.
+    """
+    ncol, nz = temp.shape
+    for p in nb.prange(ncol):
+        for k in range(nz):
+            r = point_opacity(temp[p, k], ne[p, k], nh[p, k], vturb[p, k], const, pf_table)
+            kc[p, k], kl[p, k], dop[p, k], damping[p, k], source[p, k] = r
