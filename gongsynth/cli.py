@@ -19,7 +19,6 @@ run cannot be done on this machine (more memory than is available),
 import argparse
 import dataclasses
 import math
-import os
 import sys
 from pathlib import Path
 
@@ -140,55 +139,67 @@ def _simulation_config(args):
 
 
 def _run_simulate(args):
-    from gongsynth.files import check_writable
     from gongsynth.pipeline import simulate, simulate_many
-    from gongsynth.products.output import planned_files
-    from gongsynth.resources import check_resources
+    from gongsynth.products.output import check_output_folder
+    from gongsynth.resources import check_disk_space, check_resources
 
     config = _simulation_config(args)
     progress = not args.quiet
-    if args.latitude and len(args.latitude) > 1:
-        latitudes = u.Quantity(args.latitude, u.deg)
-        folders = [_sweep_folder(args.out, lat) for lat in latitudes]
-        if len(set(folders)) != len(folders):
-            raise ValueError(f"--latitude {' '.join(map(str, args.latitude))}: two runs of the sweep "
-                             f"would share an output folder; give distinct latitudes")
-        # Refuse before hours of computing, not after.
-        for lat in latitudes:
-            check_resources(config.replace(latitude=lat))
-        _check_output_folder(args.out)
-        check_writable([p for f in folders for p in planned_files(f)], args.overwrite)
-        results = simulate_many(latitudes=latitudes, config=config, workers=args.workers,
-                                progress=progress)
-        for result, folder in zip(results, folders):
-            result.save(folder, overwrite=args.overwrite)
-            _say(args, f"latitude {result.config.latitude:.1f}: wrote {folder}")
-    else:
-        check_resources(config)
-        _check_output_folder(args.out)
-        check_writable(planned_files(args.out), args.overwrite)
-        result = simulate(config=config, progress=progress)
-        paths = result.save(args.out, overwrite=args.overwrite)
-        _say(args, "wrote " + ", ".join(str(p) for p in paths))
-        if not args.quiet:
-            print(result.summary())
+    state = {"written": [], "saving": None}
+    try:
+        if args.latitude and len(args.latitude) > 1:
+            latitudes = u.Quantity(args.latitude, u.deg)
+            folders = [_sweep_folder(args.out, lat) for lat in latitudes]
+            if len(set(folders)) != len(folders):
+                raise ValueError(f"--latitude {' '.join(map(str, args.latitude))}: two runs of the sweep "
+                                 f"would share an output folder; give distinct latitudes")
+            # Refuse before hours of computing, not after.
+            configs = [config.replace(latitude=lat) for lat in latitudes]
+            for cfg in configs:
+                check_resources(cfg)
+            check_output_folder(args.out, overwrite=True, name="--out")
+            for folder in folders:
+                check_output_folder(folder, overwrite=args.overwrite, name="--out")
+            check_disk_space(configs, args.out)
+            results = simulate_many(latitudes=latitudes, config=config, workers=args.workers,
+                                    progress=progress)
+            for result, folder in zip(results, folders):
+                state["saving"] = folder
+                result.save(folder, overwrite=args.overwrite)
+                state["written"].append(folder)
+                _say(args, f"latitude {result.config.latitude:.1f}: wrote {folder}")
+        else:
+            check_resources(config)
+            check_output_folder(args.out, overwrite=args.overwrite, name="--out")
+            check_disk_space([config], args.out)
+            result = simulate(config=config, progress=progress)
+            state["saving"] = args.out
+            paths = result.save(args.out, overwrite=args.overwrite)
+            state["written"].append(args.out)
+            _say(args, "wrote " + ", ".join(str(p) for p in paths))
+            if not args.quiet:
+                print(result.summary())
+    except (KeyboardInterrupt, OSError) as exc:
+        exc.add_note(_what_was_written(state))
+        raise
     return EXIT_OK
+
+
+def _what_was_written(state):
+    """What a failed or interrupted simulate left on disk, in words (the sets are atomic)."""
+    done = ", ".join(str(f) for f in state["written"])
+    if state["saving"] is None:
+        return "nothing was written (it stopped before saving)"
+    pending = state["saving"] if state["saving"] not in state["written"] else None
+    text = f"complete output in {done}; " if done else ""
+    if pending is not None:
+        text += f"{pending} was left as it was before this run (no partial set)"
+    return text.rstrip("; ")
 
 
 def _sweep_folder(out, latitude):
     """A run's folder in a sweep: the latitude to 0.001 deg, so distinct runs get distinct folders."""
     return out / f"lat{latitude.to_value(u.deg):+08.3f}"
-
-
-def _check_output_folder(out):
-    """Refuse, before computing, an output path that is a file or a folder we cannot write in."""
-    if out.exists() and not out.is_dir():
-        raise NotADirectoryError(f"--out {out} is a file, not a folder")
-    existing = out
-    while not existing.exists():
-        existing = existing.parent
-    if not os.access(existing, os.W_OK | os.X_OK):
-        raise PermissionError(f"--out {out}: cannot write in {existing}")
 
 
 def _run_compare(args):
@@ -264,15 +275,23 @@ def main(argv=None):
     except FileNotFoundError as exc:
         return _fail(f"file not found: {exc.filename or exc}", EXIT_USAGE)
     except (IsADirectoryError, NotADirectoryError, PermissionError) as exc:
-        return _fail(f"error: {exc}", EXIT_USAGE)
+        return _fail(_with_notes(f"error: {exc}", exc), EXIT_USAGE)
     except (ValueError, TypeError, KeyError, u.UnitsError) as exc:
         # A KeyError's str() is the repr of its message: print the message itself.
         message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
         return _fail(f"error: {message}", EXIT_USAGE)
     except (CannotRunHereError, MemoryError) as exc:
         return _fail(f"cannot run here: {exc or 'out of memory'}", EXIT_CANNOT_RUN)
-    except KeyboardInterrupt:
-        return _fail("interrupted", EXIT_INTERRUPTED)
+    except KeyboardInterrupt as exc:
+        return _fail(_with_notes("interrupted", exc), EXIT_INTERRUPTED)
+    except OSError as exc:  # a full disk, an I/O error: the output sets are atomic
+        where = f" ({exc.filename})" if exc.filename else ""
+        return _fail(_with_notes(f"error: {exc.strerror or exc}{where}", exc), EXIT_FAILURE)
+
+
+def _with_notes(message, exc):
+    notes = getattr(exc, "__notes__", [])
+    return "; ".join([message, *notes])
 
 
 def _fail(message, code):

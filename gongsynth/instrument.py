@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import numbers
 import tomllib
 from dataclasses import dataclass, field, fields
 from pathlib import Path
@@ -169,6 +170,13 @@ class GONGInstrument:
         polarisation's phase lies within this of ±π, 0.3 rad (≈ 650 m/s,
         ≈ 450 G; design §3.5).
 
+    Raises
+    ------
+    TypeError, astropy.units.UnitsError, ValueError
+        Naming the field: a value of the wrong type or unit, or outside its
+        physical range (e.g. ``seeing_fwhm`` in [0, inf) arcsec, ``quantum_efficiency``
+        in (0, 1]; ``exposure_time`` at most one frame).
+
     Notes
     -----
     The synthetic flat and dark are illustrative GONG-like maps (no real GONG
@@ -248,6 +256,9 @@ class GONGInstrument:
             kind = f.metadata[_UNIT]
             value = getattr(self, f.name)
             if kind is int:
+                if isinstance(value, numbers.Integral) and not isinstance(value, bool):
+                    value = int(value)  # numpy integers too
+                    object.__setattr__(self, f.name, value)
                 if isinstance(value, bool) or not isinstance(value, int) or value < 0:
                     raise TypeError(
                         f"GONGInstrument.{f.name} must be a non-negative int, got {value!r}"
@@ -259,8 +270,19 @@ class GONGInstrument:
                     )
             else:
                 object.__setattr__(self, f.name, _as_quantity(f.name, value, kind))
-        if self.supersampling < 1 or self.detector_shape < 1:
-            raise ValueError("GONGInstrument.supersampling and detector_shape must be >= 1")
+        for name, interval in _RANGES.items():
+            _check_range(name, getattr(self, name), interval)
+        for smaller, larger in (("flat_dust_depth_min", "flat_dust_depth_max"),
+                                ("flat_dust_radius_min", "flat_dust_radius_max")):
+            if getattr(self, smaller) > getattr(self, larger):
+                raise ValueError(f"GONGInstrument.{smaller} ({getattr(self, smaller)}) must not exceed "
+                                 f"{larger} ({getattr(self, larger)})")
+        if self.exposure_time > (1 + 1e-9) / self.frame_rate:
+            raise ValueError(f"GONGInstrument.exposure_time ({self.exposure_time}) must not exceed one "
+                             f"frame, 1 / frame_rate = {(1 / self.frame_rate).to(u.s):.6g}")
+        if self.quadrature_step >= self.integration_half_width:
+            raise ValueError(f"GONGInstrument.quadrature_step ({self.quadrature_step}) must be smaller "
+                             f"than integration_half_width ({self.integration_half_width})")
 
     # ------------------------------------------------------------------ derived
     @property
@@ -496,6 +518,35 @@ def resolve_instrument(instrument):
     return instrument
 
 
+#: Allowed range of each numeric field in its canonical unit, as an interval ("[" and "]" inclusive).
+_RANGES = {
+    **dict.fromkeys(("line_wavelength", "prefilter_center", "prefilter_fwhm", "lyot_delta_h",
+                     "michelson_fsr", "waveplate_rate", "frame_rate", "exposure_time", "lcvr_period",
+                     "aperture", "plate_scale", "effective_area", "gain", "v0", "integration_half_width",
+                     "quadrature_step", "reference_line_fwhm", "psf_radius", "flat_dust_radius_min",
+                     "flat_dust_radius_max", "dark_glow_length"), "(0, inf)"),
+    **dict.fromkeys(("seeing_fwhm", "read_noise", "dither_start", "dither_step", "flat_dust_density",
+                     "dark_level", "dark_glow", "dark_hot_factor"), "[0, inf)"),
+    **dict.fromkeys(("detector_shape", "supersampling", "dither_interval", "dither_cycle"), "[1, inf)"),
+    **dict.fromkeys(("flat_dust_depth_min", "flat_dust_depth_max", "dark_hot_fraction"), "[0, 1]"),
+    **dict.fromkeys(("flat_tilt", "flat_vignetting", "flat_prnu"), "[0, 1)"),
+    **dict.fromkeys(("quantum_efficiency", "reference_line_depth"), "(0, 1]"),
+    "lande_g": "(0, 4]", "truncate_bits": "[0, 31]", "wrap_margin": "[0, pi)",
+}
+
+
+def _check_range(name, value, interval):
+    """Raise ValueError naming the field unless ``value`` (in its canonical unit) lies in ``interval``."""
+    unit = _FIELD_UNITS[name]
+    number = value if isinstance(value, int) else float(value.to_value(unit))
+    low, high = (float(x.replace("pi", str(math.pi))) for x in interval[1:-1].split(","))
+    if (number < low or number > high or (interval[0] == "(" and number == low)
+            or (interval[-1] == ")" and number == high)):
+        shown = value if isinstance(value, int) else value.to(unit)
+        unit_text = "" if isinstance(value, int) or unit == u.one else f" {unit}"
+        raise ValueError(f"GONGInstrument.{name} must lie in {interval}{unit_text}, got {shown}")
+
+
 def _as_quantity(name, value, unit):
     """Check that ``value`` is a Quantity convertible to ``unit`` (or a number if dimensionless)."""
     if not isinstance(value, u.Quantity):
@@ -513,3 +564,6 @@ def _as_quantity(name, value, unit):
     if value.ndim != 0 or not math.isfinite(float(value.value)):
         raise ValueError(f"GONGInstrument.{name} must be a finite scalar, got {value!r}")
     return value
+
+
+_FIELD_UNITS = {f.name: f.metadata[_UNIT] for f in fields(GONGInstrument)}

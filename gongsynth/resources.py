@@ -2,10 +2,13 @@
 Will a run fit?  Its memory estimated from the configuration, before anything is computed.
 """
 import os
+import shutil
+from pathlib import Path
 
 import astropy.units as u
 
-__all__ = ["CannotRunHereError", "available_memory", "check_resources", "estimate_memory"]
+__all__ = ["CannotRunHereError", "available_memory", "check_resources", "estimate_memory",
+           "estimate_output_size", "check_disk_space"]
 
 
 class CannotRunHereError(RuntimeError):
@@ -97,3 +100,65 @@ def check_resources(config):
         raise CannotRunHereError(
             f"this run needs about {need.to(u.GB):.1f} of memory but {have.to(u.GB):.1f} is available: "
             f"use a smaller detector_shape or photosphere_shape, or a shorter duration")
+
+
+#: Bytes per detector pixel of an output set: raw.fits holds six float64 planes, the flat (one
+#: plane, or six when they differ) and the dark, each float64; five float32 maps.
+_SET_BYTES_PER_PIXEL = 8 * (6 + 6 + 1) + 4 * 5
+#: The quick-look PNG, the configuration and FITS headers, at most.
+_SET_BYTES_FIXED = 4e6
+
+
+def estimate_output_size(config):
+    """
+    An upper estimate of the disk space of a run's output set.
+
+    Parameters
+    ----------
+    config : `~gongsynth.config.SimulationConfig`
+
+    Returns
+    -------
+    `~astropy.units.Quantity`
+        In bytes.  The default run writes 64 MB (measured); the estimate for it is 96 MB.
+
+    Examples
+    --------
+    >>> from gongsynth.config import SimulationConfig
+    >>> round(estimate_output_size(SimulationConfig(seed=0)).to_value(u.MB))
+    96
+    """
+    return (_SET_BYTES_PER_PIXEL * config.detector_pixels ** 2 + _SET_BYTES_FIXED) * u.byte
+
+
+def check_disk_space(configs, directory):
+    """
+    Refuse, before computing, runs whose output sets cannot fit on the disk of ``directory``.
+
+    The sets are written into a staging folder beside the old ones, so the
+    whole new output must fit next to what is already there.
+
+    Parameters
+    ----------
+    configs : list of `~gongsynth.config.SimulationConfig`
+        One per output set.
+    directory : path-like
+        The output folder (it need not exist yet).
+
+    Raises
+    ------
+    CannotRunHereError
+        With the space needed and the space free.
+    """
+    existing = Path(directory).absolute()
+    while not existing.exists():
+        existing = existing.parent
+    try:
+        free = shutil.disk_usage(existing).free * u.byte
+    except OSError:
+        return
+    need = sum((estimate_output_size(c) for c in configs), 0 * u.byte)
+    if need > free:
+        raise CannotRunHereError(
+            f"the output needs about {need.to(u.MB):.0f} of disk space but {existing} has "
+            f"{free.to(u.MB):.0f} free")

@@ -64,7 +64,23 @@ def _as_aligned_helioprojective(smap):
             instrument=smap.instrument, observatory=smap.observatory,
             wavelength=smap.wavelength, unit=smap.unit,
         )
-        return smap.reproject_to(header, algorithm="interpolation", order="bilinear")
+        reprojected = smap.reproject_to(header, algorithm="interpolation", order="bilinear")
+        # reproject_to keeps only the WCS: give the new map back the unit (BUNIT), what the
+        # observation is, its date and the solar radius of the header it was made from.
+        meta = reprojected.meta.copy()
+        for key, value in header.items():
+            if key not in meta and not key.startswith(("naxis", "crpix", "cdelt", "crval", "ctype",
+                                                       "cunit", "pc", "cd")):
+                meta[key] = value
+        for key in ("telescop", "instrume", "obsrvtry", "detector", "wavelnth", "waveunit", "content",
+                    "origin", "dtype", "rsun_obs"):
+            if key in smap.meta:
+                meta[key] = smap.meta[key]
+        if smap.unit is not None:
+            meta["bunit"] = smap.unit.to_string("fits")
+        meta["date-avg"] = smap.reference_date.utc.isot  # the WCS's own date
+        meta["date-obs"] = smap.date.utc.isot
+        return sunpy.map.Map(reprojected.data, meta)
     angle, matrix = _rotation_angle(smap)
     if abs(angle) < 1e-3 and abs(matrix[0, 1]) < 1e-5 and abs(matrix[1, 0]) < 1e-5 \
             and matrix[0, 0] > 0 and matrix[1, 1] > 0:
