@@ -23,6 +23,7 @@ import numbers
 import astropy.units as u
 import numpy as np
 
+from gongsynth.sun.sampling import MAX_FIELD, MAX_VELOCITY, check_spectral_sampling
 from gongsynth.sun.stokes_files import RADIANCE_UNIT, STOKES, read_fits, read_rh15d, write_fits
 from gongsynth.validation import check_quantity
 
@@ -302,6 +303,31 @@ class StokesCube:
     def blos(self):
         """True line-of-sight field, `~astropy.units.Quantity` (ny, nx) in G, or None."""
         return self._blos
+
+    def check_spectral_sampling(self, instrument=None, *, max_field=MAX_FIELD, max_velocity=MAX_VELOCITY):
+        """
+        Refuse a cube whose wavelengths cannot give the GONG channel integrals.
+
+        `gongsynth.sun.sampling.check_spectral_sampling` on the cube's wavelengths: they must cover
+        the line ± two widths, the Zeeman shift of ``max_field`` and the
+        Doppler shift of ``max_velocity`` (676.7404-676.8196 nm by default), at
+        steps of 2 pm or finer (`gongsynth.sun.sampling.spectral_requirement`).
+        Call it on a cube of your own before simulating it: a narrower or
+        coarser grid gives wrong magnetograms without any other sign.
+
+        Parameters
+        ----------
+        instrument : `~gongsynth.GONGInstrument`, optional
+        max_field, max_velocity : `~astropy.units.Quantity`
+            Default 4 kG and 3 km/s.
+
+        Raises
+        ------
+        ValueError
+            Saying what the cube covers and what is needed.
+        """
+        check_spectral_sampling(self._wavelength, instrument, max_field=max_field,
+                                max_velocity=max_velocity, name="the cube's wavelength grid")
 
     @property
     def shape(self):
