@@ -148,3 +148,15 @@ def test_weak_flux_of_a_calibrated_map_grows_by_the_tables_factor():
     expected = np.sum(np.abs(smap.data[on]) * factor[on]) / np.sum(np.abs(smap.data[on]))
     assert np.abs(out.data[on]).sum() / np.abs(smap.data[on]).sum() == pytest.approx(expected, rel=1e-9)
     assert out.meta["caltable"].endswith("calibration_default.ecsv")
+
+
+def test_same_seeds_same_table():
+    from gongsynth.calibration_sweep import build_calibration_table
+
+    def build():
+        return build_calibration_table([30] * u.deg, seeds=[3], regions=["quiet"], n_boot=5,
+                                       detector_shape=96, duration=1 * u.min, progress=False)
+
+    first, second = build(), build()
+    for column in ("factor", "uncertainty", "n_pixels", "nodes", "values"):
+        assert np.array_equal(np.asarray(first[column]), np.asarray(second[column]), equal_nan=True), column
