@@ -155,7 +155,8 @@ def test_same_seeds_same_table():
 
     def build():
         return build_calibration_table([30] * u.deg, seeds=[3], regions=["quiet"], n_boot=5,
-                                       detector_shape=96, duration=1 * u.min, progress=False)
+                                       detector_shape=96, duration=1 * u.min, photosphere_shape=(128, 128),
+                                       photosphere_pixel_size=768 * u.km, progress=False)
 
     first, second = build(), build()
     for column in ("factor", "uncertainty", "n_pixels", "nodes", "values"):
