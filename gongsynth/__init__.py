@@ -18,7 +18,8 @@ from gongsynth.instrument import GONGInstrument
 from gongsynth.pipeline import SimulationResult, simulate, simulate_many
 from gongsynth.products.maps import GONGSynthMap  # registers the map source with sunpy.map.Map
 from gongsynth.stages import filters, reduction
-from gongsynth.sun import photosphere
+from gongsynth.sun import photosphere, rt
+from gongsynth.sun.atmosphere import Atmosphere
 from gongsynth.sun.stokes import StokesCube
 from gongsynth.version import version as __version__
 
@@ -30,10 +31,10 @@ __citation__ = (
 # The dotted paths promised to users (DESIGN §2) name the modules in their new
 # folders: ``import gongsynth.filters`` gives `gongsynth.stages.filters` itself.
 for _name, _module in {"filters": filters, "reduction": reduction, "compare": compare,
-                       "calibration": calibration, "photosphere": photosphere}.items():
+                       "calibration": calibration, "photosphere": photosphere, "rt": rt}.items():
     sys.modules[f"{__name__}.{_name}"] = _module
 del _name, _module
 
-__all__ = ["GONGInstrument", "GONGSynthMap", "SimulationResult", "StokesCube", "calibrate", "calibration",
-           "compare", "filters", "load_observation", "photosphere", "reduction", "simulate",
-           "simulate_many", "weak_flux_factor", "__citation__", "__version__"]
+__all__ = ["Atmosphere", "GONGInstrument", "GONGSynthMap", "SimulationResult", "StokesCube", "calibrate",
+           "calibration", "compare", "filters", "load_observation", "photosphere", "reduction", "rt",
+           "simulate", "simulate_many", "weak_flux_factor", "__citation__", "__version__"]

@@ -8,4 +8,7 @@ opacity), `hydrostatic` (1-D models on optical-depth or column-mass scales),
 through the periodic box), `truth` (the ground-truth B_LOS), `synthesis`
 (`synthesize`: Atmosphere → StokesCube).
 """
-__all__ = []
+from gongsynth.sun.rt.atomic_data import NiLineData
+from gongsynth.sun.rt.synthesis import synthesize
+
+__all__ = ["synthesize", "NiLineData"]

@@ -1,0 +1,95 @@
+r"""
+Inclined rays through the horizontally periodic box.
+
+A ray toward the observer runs along n = (sinθ cos a, sinθ sin a, cosθ)
+(θ = arccos μ, a the line-of-sight azimuth of `gongsynth.geometry`).  The ray
+that is stored in output pixel (j, i) crosses the reference height z_ref at
+the centre of that pixel, (x_i, y_j); at height z it is at
+
+.. math:: (x, y) = (x_i, y_j) + (z - z_\mathrm{ref})\,\tan\theta\,(\cos a, \sin a),
+
+wrapped periodically.  `synthesize` takes z_ref as the mean height of
+τ_c = 1 at 676.8 nm (vertical), so the Stokes images and the truth are
+registered with the atmosphere where the continuum forms, and the output stays
+on the atmosphere's horizontal grid (pixel size unchanged): foreshortening is
+left to the scene stage, which projects the surface grid onto the sky at the
+latitude (no double foreshortening).  Every field is sampled at the grid's
+heights by bilinear interpolation in x and y; along the ray the step is Δz/μ.
+"""
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+__all__ = ["ray_offsets", "sample_rays"]
+
+
+def ray_offsets(z_km, z_ref_km, mu, azimuth_rad, pixel_km):
+    """
+    Horizontal offsets (pixels) of a ray at each height relative to where it crosses z_ref.
+
+    Parameters
+    ----------
+    z_km : `numpy.ndarray`
+        Heights (km).
+    z_ref_km : float
+        Reference height (km).
+    mu : float
+        cos θ in (0, 1].
+    azimuth_rad : float
+        Line-of-sight azimuth (rad).
+    pixel_km : float
+        Pixel size (km).
+
+    Returns
+    -------
+    dx, dy : `numpy.ndarray`
+        Offsets in pixels along x and y.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> dx, dy = ray_offsets(np.array([0.0, 100.0]), 0.0, 0.5, 0.0, 10.0)
+    >>> np.round(dx, 3).tolist(), np.round(dy, 3).tolist()
+    ([0.0, 17.321], [0.0, 0.0])
+    """
+    tan_t = math.sqrt(max(0.0, 1.0 - mu * mu)) / mu
+    shift = (np.asarray(z_km, dtype=np.float64) - z_ref_km) * tan_t / pixel_km
+    return shift * math.cos(azimuth_rad), shift * math.sin(azimuth_rad)
+
+
+@nb.njit(parallel=True, cache=True)
+def sample_rays(field, rows, dx, dy, out):
+    """
+    Sample a (nz, ny, nx) field along the rays of the given output rows.
+
+    Parameters
+    ----------
+    field : (nz, ny, nx) array
+        Any strides (broadcast views are fine).
+    rows : (nr,) int64
+        Output rows.
+    dx, dy : (nz,) float64
+        Offsets from `ray_offsets`.
+    out : (nr * nx, nz) float64
+        Filled with the bilinearly interpolated values, ray points bottom to top.
+    """
+    nz, ny, nx = field.shape
+    nr = rows.size
+    for q in nb.prange(nr * nx):
+        r = q // nx
+        i = q - r * nx
+        j = rows[r]
+        for k in range(nz):
+            fx0 = math.floor(dx[k])
+            fy0 = math.floor(dy[k])
+            wx = dx[k] - fx0
+            wy = dy[k] - fy0
+            x0 = (i + int(fx0)) % nx
+            y0 = (j + int(fy0)) % ny
+            x1 = (x0 + 1) % nx
+            y1 = (y0 + 1) % ny
+            out[q, k] = ((1.0 - wy) * ((1.0 - wx) * field[k, y0, x0] + wx * field[k, y0, x1])
+                         + wy * ((1.0 - wx) * field[k, y1, x0] + wx * field[k, y1, x1]))
