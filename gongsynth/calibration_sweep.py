@@ -14,7 +14,7 @@ from gongsynth.analysis.calibration_table import TABLE_LATITUDES, calibration_ta
 from gongsynth.analysis.weak_flux import weak_flux_factor
 from gongsynth.config import SimulationConfig
 from gongsynth.geometry import Pointing
-from gongsynth.pipeline import simulate
+from gongsynth.pipeline import simulate_many
 from gongsynth.version import version as __version__
 
 __all__ = ["PRESETS", "build_calibration_table"]
@@ -30,8 +30,8 @@ PRESETS = {
 
 
 def build_calibration_table(latitudes=TABLE_LATITUDES, seeds=(1, 2), *, regions=("quiet", "sunspot"),
-                            config=None, preset="default", n_boot=50, progress=True, input_sun=None,
-                            **simulate_kwargs):
+                            config=None, preset="default", n_boot=50, client=None, workers=None,
+                            progress=True, input_sun=None, **simulate_kwargs):
     """
     Simulate a latitude sweep and tabulate the papers' calibration curves and weak-flux factors.
 
@@ -56,6 +56,12 @@ def build_calibration_table(latitudes=TABLE_LATITUDES, seeds=(1, 2), *, regions=
         ``"paper"`` uses the authors' seeing kernel (4.24″ FWHM).
     n_boot : int
         Bootstrap resamples per fit.
+    client : `dask.distributed.Client`, optional
+        Run each latitude's seeds on this Dask cluster
+        (`gongsynth.simulate_many`); the table is the same.
+    workers : int, optional
+        Without a client: a local Dask cluster of this many processes per
+        latitude (``None`` or 1: serial, no Dask needed).
     progress : bool
         A progress bar over the runs.
     input_sun : str, optional
@@ -99,10 +105,9 @@ def build_calibration_table(latitudes=TABLE_LATITUDES, seeds=(1, 2), *, regions=
     fits, mu = [], []
     bar = tqdm(total=latitudes.size * len(seeds), disable=not progress, desc="calibration table")
     for latitude in latitudes:
-        runs = []
-        for seed in seeds:
-            runs.append(simulate(config=config.replace(latitude=latitude, seed=seed), progress=False))
-            bar.update()
+        runs = simulate_many(latitudes=[latitude.to_value(u.deg)] * len(seeds) * u.deg, seeds=seeds,
+                             config=config, client=client, workers=workers, progress=False)
+        bar.update(len(seeds))
         for region in regions:
             fits.append(weak_flux_factor(runs, region=region, n_boot=n_boot))
             mu.append(Pointing(latitude, config.obstime).mu)
