@@ -264,15 +264,8 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False):
                             "the planes tiled on the sky at the pointing"))
 
     def optics_stage(light, truth_scene):
-        counts = optics.expected_counts(light, inst, psf=effects.psf, seeing=effects.seeing,
-                                        workers=config.workers)
-        truth = truth_psf = None
-        if truth_scene is not None:
-            truth = optics.observe(truth_scene.data, truth_scene.pixel_scale, instrument=inst,
-                                   psf=False, boundary=truth_scene.boundary)
-            truth_psf = optics.observe(truth_scene.data, truth_scene.pixel_scale, instrument=inst,
-                                       psf=effects.psf, seeing=effects.seeing,
-                                       boundary=truth_scene.boundary, workers=config.workers)
+        counts, truth, truth_psf = optics.image_scene(light, truth_scene, inst, psf=effects.psf,
+                                                      seeing=effects.seeing, workers=config.workers)
         return {"expected_counts": counts, "truth": truth, "truth_psf": truth_psf}
 
     def camera(expected_counts):

@@ -23,7 +23,15 @@ import scipy.fft
 import scipy.sparse
 
 from gongsynth.instrument import resolve_instrument
-from gongsynth.stages.psf import normalize_kernel, psf_instrument, psf_kernel, psf_profile
+from gongsynth.stages.psf import (
+    BandLimitedImager,
+    fft_workers,
+    normalize_kernel,
+    psf_instrument,
+    psf_kernel,
+    psf_profile,
+    wrapped_kernel,
+)
 from gongsynth.stages.scene.scene import BOUNDARIES
 from gongsynth.validation import check_finite, check_quantity
 
@@ -37,6 +45,7 @@ __all__ = [
     "observe",
     "photometric_factor",
     "expected_counts",
+    "image_scene",
 ]
 
 
@@ -70,19 +79,6 @@ def _check_stack(values, name):
         values = values.astype(float)
     check_finite(values, name)
     return values
-
-
-def _wrapped_kernel(kernel, shape, dtype):
-    """Kernel embedded in an array of ``shape`` with its centre at [0, 0] (wrap-added)."""
-    ky, kx = kernel.shape
-    rows = (np.arange(ky) - ky // 2) % shape[0]
-    cols = (np.arange(kx) - kx // 2) % shape[1]
-    out = np.zeros(shape, dtype=dtype)
-    if ky <= shape[0] and kx <= shape[1]:
-        out[np.ix_(rows, cols)] = kernel
-    else:
-        np.add.at(out, np.ix_(rows, cols), kernel)
-    return out
 
 
 def convolve(stack, kernel, *, boundary="periodic", workers=None):
@@ -137,6 +133,7 @@ def _convolved_planes(values, kernel, boundary, workers):
     if boundary not in BOUNDARIES:
         raise ValueError(f"boundary must be one of {BOUNDARIES}, got {boundary!r}")
     k = normalize_kernel(kernel, "kernel")
+    workers = fft_workers(workers)
     ny, nx = values.shape[-2:]
     ky, kx = k.shape
     if boundary == "periodic":
@@ -147,7 +144,7 @@ def _convolved_planes(values, kernel, boundary, workers):
         pads = ((ky - 1 - ky // 2, ky // 2), (kx - 1 - kx // 2, kx // 2))
         fshape = (scipy.fft.next_fast_len(ny + ky - 1, real=True),
                   scipy.fft.next_fast_len(nx + kx - 1, real=True))
-    kfft = scipy.fft.rfft2(_wrapped_kernel(k, fshape, values.dtype), workers=workers)
+    kfft = scipy.fft.rfft2(wrapped_kernel(k, fshape, values.dtype), workers=workers)
     mode = "constant" if boundary == "zero" else "symmetric"
     buffer = np.zeros(fshape, dtype=values.dtype)
     for plane in values.reshape((-1, ny, nx)):
@@ -283,13 +280,31 @@ def pixelize(stack, pixel_scale: u.arcsec, *, instrument=None, periodic=False, m
     ny, nx = values.shape[-2:]
     ndy = _detector_count(ny, scale, plate, "pixelize")
     ndx = _detector_count(nx, scale, plate, "pixelize")
-    opy = _axis_operator(ny, ndy, inst.supersampling, bool(periodic), method)
-    opx = _axis_operator(nx, ndx, inst.supersampling, bool(periodic), method)
     planes = values.reshape((-1, ny, nx))
+    factor = inst.supersampling
+    if (ny, nx) == (ndy * factor, ndx * factor):
+        # Exactly `factor` samples per pixel: resampling is the identity, binning a mean.
+        out = planes.reshape(-1, ndy, factor, ndx, factor).mean(axis=(2, 4), dtype=np.float64)
+        return _with_unit(out.reshape(values.shape[:-2] + (ndy, ndx)), unit)
+    opy = _axis_operator(ny, ndy, factor, bool(periodic), method)
+    opx = _axis_operator(nx, ndx, factor, bool(periodic), method)
     out = np.empty((planes.shape[0], ndy, ndx))
     for i, plane in enumerate(planes):
         out[i] = (opx @ (opy @ plane).T).T
     return _with_unit(out.reshape(values.shape[:-2] + (ndy, ndx)), unit)
+
+
+def _exact_imager(shape, pixel_scale, inst, kernel, boundary, dtype, workers):
+    """`BandLimitedImager` when ``shape`` holds exactly supersampling² samples per detector pixel."""
+    if boundary not in BOUNDARIES:
+        raise ValueError(f"boundary must be one of {BOUNDARIES}, got {boundary!r}")
+    factor = inst.supersampling
+    scale = float(u.Quantity(pixel_scale, u.arcsec).value)
+    plate = inst.plate_scale.to_value(u.arcsec)
+    if not math.isclose(scale * factor, plate, rel_tol=1e-9) or shape[0] % factor or shape[1] % factor:
+        return None
+    return BandLimitedImager(shape, normalize_kernel(kernel, "psf"), boundary, factor,
+                              np.float32 if dtype == np.float32 else np.float64, workers)
 
 
 @u.quantity_input
@@ -345,6 +360,13 @@ def observe(stack, pixel_scale: u.arcsec, *, instrument=None, psf=True, seeing=T
         return pixelize(stack, pixel_scale, instrument=inst, periodic=periodic, method=method)
     values, unit = _split_unit(stack, "stack")
     values = _check_stack(values, "stack")
+    imager = _exact_imager(values.shape[-2:], pixel_scale, inst, kernel, boundary, values.dtype, workers)
+    if imager is not None:
+        planes = values.reshape((-1,) + values.shape[-2:])
+        out = np.empty((planes.shape[0],) + imager.detector_shape)
+        for i, plane in enumerate(planes):
+            out[i] = imager(plane)
+        return _with_unit(out.reshape(values.shape[:-2] + imager.detector_shape), unit)
     # Plane by plane: PSF then pixelization, so no convolved copy of the stack is held.
     planes = [pixelize(conv, pixel_scale, instrument=inst, periodic=periodic, method=method)
               for conv in _convolved_planes(values, kernel, boundary, workers)]
@@ -423,6 +445,11 @@ def expected_counts(scene, instrument=None, *, psf=True, seeing=True, workers=No
     radiance = check_quantity(scene.data, u.erg / (u.s * u.cm**2 * u.arcsec**2), "scene.data")
     planes = observe(radiance, scene.pixel_scale, instrument=inst, psf=psf, seeing=seeing,
                      boundary=scene.boundary, workers=workers)
+    return _counts(planes, inst)
+
+
+def _counts(planes, inst):
+    """Detector-pixel radiances (a Quantity) to expected electrons per frame."""
     counts = (planes * photometric_factor(inst)).to(u.electron)
     # FFT convolution leaves round-off of either sign (~1e-16 of the peak) where
     # the scene is dark (beyond the limb); counts cannot be negative, so those
@@ -430,3 +457,80 @@ def expected_counts(scene, instrument=None, *, psf=True, seeing=True, workers=No
     tiny = 1e-9 * max(float(np.max(counts.value, initial=0.0)), 0.0)
     counts[(counts.value < 0) & (counts.value > -tiny)] = 0 * u.electron
     return counts
+
+
+def _image_planes(values, imager):
+    """
+    A stack (k, ny, nx) through ``imager``, plane by plane.
+
+    In float32 the planes' common part (their mean) and each plane's
+    difference from it are transformed separately: the round-off of the
+    common part is the same in every plane, so it cancels in the ratios the
+    reduction measures (phases, hence B and v), and that of the differences
+    is relative to the differences, which are small.
+    """
+    out = np.empty((values.shape[0],) + imager.detector_shape)
+    if imager.dtype != np.float32 or values.shape[0] < 2:
+        for i, plane in enumerate(values):
+            out[i] = imager(plane)
+        return out
+    common = values.mean(axis=0, dtype=np.float64).astype(np.float32)
+    base = imager(common)
+    for i, plane in enumerate(values):
+        out[i] = imager(plane - common)
+        out[i] += base
+    return out
+
+
+def image_scene(light, truth=None, instrument=None, *, psf=True, seeing=True, workers=None):
+    """
+    Expected counts of a scene and its truth map without and with the PSF, in one pass.
+
+    The same as `expected_counts` for ``light`` and `observe` (``psf=False``,
+    then ``psf``) for ``truth``, but the PSF operator (its transfer function)
+    is built once and shared by the light planes and the truth.
+
+    Parameters
+    ----------
+    light : `~gongsynth.stages.scene.scene.Scene`
+        Radiance at Earth per arcsec² (6, NY, NX).
+    truth : `~gongsynth.stages.scene.scene.Scene`, optional
+        A map (NY, NX) on the same grid (e.g. B_LOS in G).
+    instrument : `~gongsynth.GONGInstrument`, optional
+        Defaults to the light scene's.
+    psf, seeing : optional
+        As in `observe`.
+    workers : int, optional
+        Threads for the FFTs (default: every core).
+
+    Returns
+    -------
+    counts : `~astropy.units.Quantity`
+        (6, ny_det, nx_det) electrons per frame (`expected_counts`).
+    truth_map, truth_psf : `~astropy.units.Quantity` or None
+        The truth averaged over each detector pixel, without and with the PSF.
+    """
+    inst = resolve_instrument(instrument if instrument is not None else getattr(light, "instrument", None))
+    radiance = check_quantity(light.data, u.erg / (u.s * u.cm**2 * u.arcsec**2), "light.data")
+    kernel = _resolve_kernel(psf, seeing, light.pixel_scale.to_value(u.arcsec), inst)
+    values = _check_stack(radiance.value, "light.data")
+    imager = None if kernel is None else _exact_imager(values.shape[-2:], light.pixel_scale, inst, kernel,
+                                                       light.boundary, values.dtype, workers)
+    if imager is None:  # no PSF, or a grid that needs the reference resampling
+        counts = expected_counts(light, inst, psf=psf, seeing=seeing, workers=workers)
+    else:
+        planes = _image_planes(values, imager)
+        counts = _counts(u.Quantity(planes, radiance.unit, copy=False), inst)
+    if truth is None:
+        return counts, None, None
+    periodic = truth.boundary == "periodic"
+    truth_map = pixelize(truth.data, truth.pixel_scale, instrument=inst, periodic=periodic)
+    if kernel is None:
+        return counts, truth_map, truth_map.copy()
+    if imager is None or truth.data.shape != values.shape[-2:] or truth.boundary != light.boundary:
+        truth_psf = observe(truth.data, truth.pixel_scale, instrument=inst, psf=psf, seeing=seeing,
+                            boundary=truth.boundary, workers=workers)
+    else:
+        data, unit = _split_unit(truth.data, "truth.data")
+        truth_psf = _with_unit(imager(_check_stack(data, "truth.data")), unit)
+    return counts, truth_map, truth_psf
