@@ -175,7 +175,7 @@ class GONGInstrument:
     TypeError, astropy.units.UnitsError, ValueError
         Naming the field: a value of the wrong type or unit, or outside its
         physical range (e.g. ``seeing_fwhm`` in [0, inf) arcsec, ``quantum_efficiency``
-        in (0, 1]; ``exposure_time`` at most one frame).
+        in (0, 1]).
 
     Notes
     -----
@@ -277,9 +277,6 @@ class GONGInstrument:
             if getattr(self, smaller) > getattr(self, larger):
                 raise ValueError(f"GONGInstrument.{smaller} ({getattr(self, smaller)}) must not exceed "
                                  f"{larger} ({getattr(self, larger)})")
-        if self.exposure_time > (1 + 1e-9) / self.frame_rate:
-            raise ValueError(f"GONGInstrument.exposure_time ({self.exposure_time}) must not exceed one "
-                             f"frame, 1 / frame_rate = {(1 / self.frame_rate).to(u.s):.6g}")
         if self.quadrature_step >= self.integration_half_width:
             raise ValueError(f"GONGInstrument.quadrature_step ({self.quadrature_step}) must be smaller "
                              f"than integration_half_width ({self.integration_half_width})")

@@ -170,7 +170,8 @@ def test_interrupted_save_leaves_no_partial_file(disk_centre, tmp_path, monkeypa
     monkeypatch.setattr(fits.PrimaryHDU, "writeto", broken)
     with pytest.raises(KeyboardInterrupt):
         disk_centre.save(tmp_path / "run")
-    assert list((tmp_path / "run").iterdir()) == []
+    # The set is written as a whole (issue 12): no folder, no staging folder, no partial file.
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_bad_arguments():

@@ -144,7 +144,10 @@ class MapSummary:
 
 
 def _describe_map(smap):
-    parts = [str(p) for p in (smap.observatory, smap.instrument) if p]
+    parts = []
+    for part in (smap.observatory, smap.instrument):
+        if part and str(part) not in parts:  # gongsynth maps: observatory and instrument alike
+            parts.append(str(part))
     parts.append(smap.date.isot[:19] if smap.date is not None else "no date")
     return " ".join(parts)
 
@@ -358,51 +361,64 @@ class ComparisonReport:
 
 
 def _plot(report, fig):
-    """Draw maps, histograms on log axes and the noise boxes of both maps."""
+    """Draw maps (with colour bars), histograms on log axes and the noise boxes of both maps."""
     import matplotlib.colors as mcolors
 
     limit = _DISPLAY_LIMIT
     colours = {"sim": "C0", "obs": "C3"}
+    grid = fig.add_gridspec(2, 3, left=0.06, right=0.98, bottom=0.07, top=0.86, wspace=0.42, hspace=0.42)
     for i, (key, summ) in enumerate((("sim", report.sim), ("obs", report.obs))):
-        ax = fig.add_subplot(2, 3, i + 1, projection=summ.map)
-        summ.map.plot(axes=ax, cmap="gray", norm=mcolors.Normalize(-limit, limit), title=False)
-        ax.set_title(f"{summ.label}: {summ.description}\n{summ.pixel_scale.to_value(u.arcsec):.2f}″ pixels"
-                     + (", degraded to GONG" if summ.degraded else ""), fontsize=9)
-        ax.coords[0].set_axislabel("Solar X")
-        ax.coords[1].set_axislabel("Solar Y")
+        ax = fig.add_subplot(grid[0, i], projection=summ.map)
+        image = summ.map.plot(axes=ax, cmap="gray", norm=mcolors.Normalize(-limit, limit), title=False)
+        ax.set_title(f"{key}: {summ.description}\n{summ.pixel_scale.to_value(u.arcsec):.2f}″ pixels"
+                     + (", degraded to GONG" if summ.degraded else ""), fontsize=8)
+        for coord, axis in zip(ax.coords, ("Solar X", "Solar Y")):
+            coord.set_axislabel(axis, fontsize=8)
+            coord.set_ticklabel(size=7, exclude_overlapping=True)
+            coord.set_ticks(number=4)
+        values = summ.values
+        extend = {(True, True): "both", (True, False): "min", (False, True): "max"}.get(
+            (bool(values.size and values.min() < -limit), bool(values.size and values.max() > limit)),
+            "neither")
+        bar = fig.colorbar(image, ax=ax, shrink=0.85, extend=extend)
+        bar.set_label(f"B_LOS [G], saturated at ±{limit} G", fontsize=7)
+        bar.ax.tick_params(labelsize=7)
         c = summ.noise.box_centres.to_value(u.arcsec)
         q = summ.noise.quietest
         ax.plot_coord(SkyCoord(c[:, 0] * u.arcsec, c[:, 1] * u.arcsec, frame=summ.map.coordinate_frame),
                       "s", ms=3, mfc="none", mec=colours[key], lw=0)
         ax.plot_coord(SkyCoord(c[q, 0] * u.arcsec, c[q, 1] * u.arcsec, frame=summ.map.coordinate_frame),
                       "s", ms=6, mfc="none", mec="yellow", lw=0)
-    ax = fig.add_subplot(2, 3, 3)
+    ax = fig.add_subplot(grid[0, 2])
     for key, summ in (("sim", report.sim), ("obs", report.obs)):
         c = summ.noise.box_centres.to_value(u.arcsec)
         r = np.hypot(c[:, 0], c[:, 1]) / summ.map.rsun_obs.to_value(u.arcsec)
         ax.plot(r, summ.noise.box_sigma.to_value(u.G), "o", color=colours[key], ms=4, mfc="none",
-                label=f"{summ.label}: robust σ per box")
+                label=f"{key}: robust σ per box")
         ax.axhline(summ.noise.sigma.to_value(u.G), color=colours[key], lw=1,
-                   label=f"quietest box σ = {summ.noise.sigma.to_value(u.G):.2f} G")
+                   label=f"{key}: quietest box σ = {summ.noise.sigma.to_value(u.G):.2f} G")
         ax.axhline(summ.noise.difference.to_value(u.G), color=colours[key], lw=1, ls=":",
-                   label=f"pixel-difference σ = {summ.noise.difference.to_value(u.G):.2f} G")
-    ax.set_xlabel("box distance from disk centre [R☉]")
-    ax.set_ylabel("noise [G]")
+                   label=f"{key}: pixel-difference σ = {summ.noise.difference.to_value(u.G):.2f} G")
+    ax.set_xlabel("box distance from disk centre [R☉]", fontsize=8)
+    ax.set_ylabel("noise [G]", fontsize=8)
     ax.set_yscale("log")
-    ax.set_title(f"noise in {report.sim.noise.box_size.to_value(u.arcsec):.0f}″ boxes", fontsize=9)
-    ax.legend(fontsize=7)
+    ax.tick_params(labelsize=7)
+    ax.set_title(f"noise in {report.sim.noise.box_size.to_value(u.arcsec):.0f}″ boxes "
+                 "(squares on the maps; yellow: quietest)", fontsize=8)
+    low, high = ax.get_ylim()
+    ax.set_ylim(low, high * (high / low) ** 0.6)  # room above the points for the legend
+    ax.legend(fontsize=6, loc="upper right", ncol=2, framealpha=0.9)
 
-    _plot_histograms(fig.add_subplot(2, 3, 4), report, colours, "histogram", "B_LOS [G]",
+    _plot_histograms(fig.add_subplot(grid[1, 0]), report, colours, "histogram", "B_LOS [G]",
                      "on-disk histogram")
-    _plot_histograms(fig.add_subplot(2, 3, 5), report, colours, "abs_histogram", "|B_LOS| [G]",
+    _plot_histograms(fig.add_subplot(grid[1, 1]), report, colours, "abs_histogram", "|B_LOS| [G]",
                      "on-disk |B| histogram", log_x=True)
 
-    ax = fig.add_subplot(2, 3, 6)
+    ax = fig.add_subplot(grid[1, 2])
     ax.axis("off")
     ax.text(0, 1, report.summary(figure=True), family="monospace", fontsize=7, va="top", ha="left",
             transform=ax.transAxes)
-    # Fixed margins: tight_layout costs more than the rest of the figure.
-    fig.subplots_adjust(left=0.06, right=0.98, bottom=0.07, top=0.93, wspace=0.35, hspace=0.35)
+    fig.suptitle(f"sim = {report.sim.label}\nobs = {report.obs.label}", fontsize=9)
     return fig
 
 
@@ -495,7 +511,8 @@ def compare_files(sim_path, obs_path, *, out=None, overwrite=False, instrument=N
         FITS files read with `load_observation` (``kind="magnetogram"``).
     out : str or `pathlib.Path`, optional
         Where to save the side-by-side figure (format from the suffix, e.g.
-        ``.png`` or ``.pdf``); written atomically.  No figure is drawn if None.
+        ``.png`` or ``.pdf``; PNG if there is none); written atomically.  An
+        unknown suffix is refused before any work.  No figure is drawn if None.
     overwrite : bool
         Replace an existing ``out``.
     instrument : `~gongsynth.GONGInstrument`, optional
@@ -532,18 +549,36 @@ def compare_files(sim_path, obs_path, *, out=None, overwrite=False, instrument=N
     """
     if out is not None:
         out = Path(out)
+        if out.is_dir():
+            raise IsADirectoryError(f"compare_files: out {out} is a folder; give a file name such as "
+                                    f"{out / 'compare.png'}")
         check_writable([out], overwrite)  # before the work, not after it
         if not out.parent.is_dir():
             raise FileNotFoundError(f"compare_files: the folder of out does not exist: {out.parent}")
+        image_format = _figure_format(out)
     sim = load_observation(sim_path, kind="magnetogram")
     obs = load_observation(obs_path, kind="magnetogram")
     labels = (f"simulated ({Path(sim_path).name})", f"observed ({Path(obs_path).name})")
     report = compare(sim, obs, instrument=instrument, degrade=degrade, labels=labels,
                      plot=out is not None)
     if out is not None:
-        with atomic_path(out, overwrite=overwrite) as tmp:  # tmp keeps the suffix: savefig's format
-            report.figure.savefig(tmp, dpi=110)
+        with atomic_path(out, overwrite=overwrite) as tmp:
+            report.figure.savefig(tmp, dpi=110, format=image_format)
     return report
+
+
+def _figure_format(out):
+    """The image format of ``out`` from its suffix (PNG without one); refuse one matplotlib cannot write."""
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    suffix = out.suffix.lower().lstrip(".")
+    if not suffix:
+        return "png"
+    supported = FigureCanvasBase.get_supported_filetypes()
+    if suffix not in supported:
+        raise ValueError(f"compare: cannot write a figure as .{suffix} ({out}); use one of "
+                         f"{', '.join('.' + k for k in sorted(supported))}, or no suffix for PNG")
+    return suffix
 
 
 def _plot_histograms(ax, report, colours, attribute, xlabel, title, *, log_x=False):
@@ -551,11 +586,12 @@ def _plot_histograms(ax, report, colours, attribute, xlabel, title, *, log_x=Fal
     for key, summ in (("sim", report.sim), ("obs", report.obs)):
         h = getattr(summ, attribute)
         ax.stairs(np.where(h.density.value > 0, h.density.value, np.nan), h.edges.to_value(u.G),
-                  color=colours[key], label=summ.label)
+                  color=colours[key], label=key)
     if log_x:
         ax.set_xscale("log")
     ax.set_yscale("log")
-    ax.set_xlabel(xlabel)
-    ax.set_ylabel("probability density [1/G]")
+    ax.set_xlabel(xlabel, fontsize=8)
+    ax.set_ylabel("probability density [1/G]", fontsize=8)
+    ax.tick_params(labelsize=7)
     ax.set_title(title, fontsize=9)
     ax.legend(fontsize=8)

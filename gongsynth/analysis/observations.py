@@ -253,8 +253,16 @@ def _read_image(path, notes):
     while data.ndim > 2 and data.shape[0] == 1:
         data = data[0]
     if data.ndim != 2:
+        axes = [str(header.get(f"CTYPE{i}", "")).strip() for i in range(data.ndim, 0, -1)]
+        named = f" with axes {axes}" if any(axes) else ""
+        what = f" (OBS_TYPE {header['OBS_TYPE']!r})" if "OBS_TYPE" in header else ""
+        if "NREAL" in header:
+            model = str(header.get("MODEL", "")).strip()
+            what = f" (the {model} model's {header['NREAL']} realisations, NREAL)"
         raise ValueError(
-            f"{path}: the image is a {data.ndim}-D array of shape {data.shape}, not a 2-D map"
+            f"{path}: the image is a {data.ndim}-D array of shape {data.shape}{named}{what}, not a 2-D "
+            f"map; save the one map to compare (e.g. one realisation or one Stokes parameter) as a FITS "
+            f"image with its WCS"
         )
     if data.dtype.kind not in "fiu":
         raise ValueError(f"{path}: the image has non-numeric data of type {data.dtype}")
@@ -262,8 +270,11 @@ def _read_image(path, notes):
 
 
 def _describe(header):
-    return (f"BUNIT = {header.get('BUNIT', '(none)')!r}, CONTENT = {header.get('CONTENT', '(none)')!r}, "
+    text = (f"BUNIT = {header.get('BUNIT', '(none)')!r}, CONTENT = {header.get('CONTENT', '(none)')!r}, "
             f"IMTYPE = {header.get('IMTYPE', '(none)')!r}")
+    if "OBS_TYPE" in header:
+        text += f", OBS_TYPE = {header['OBS_TYPE']!r}"
+    return text
 
 
 def _says(header, *words):
@@ -280,7 +291,8 @@ def _check_kind(smap, header, kind, path, notes):
         if unit is None and _says(header, "MAGNETOGRAM", "MAGNETIC"):
             notes.append("no BUNIT; CONTENT/IMTYPE says magnetogram: values taken as gauss")
             return 1.0
-        raise ObservationKindError(f"{path} is not a magnetogram: {_describe(header)}")
+        raise ObservationKindError(f"{path} is not a magnetogram: {_describe(header)} (a magnetogram "
+                                   f"holds a field in gauss: BUNIT G, or CONTENT/IMTYPE saying magnetogram)")
     if kind == "continuum":
         magnetic = unit is not None and unit.is_equivalent(u.G)
         velocity = unit is not None and unit.is_equivalent(u.m / u.s)
