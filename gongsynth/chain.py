@@ -42,7 +42,7 @@ from gongsynth.stages.channels import channel_images
 from gongsynth.stages.reduction import reduce
 from gongsynth.stages.scene.fulldisk import full_disk_scene
 from gongsynth.stages.scene.tiled import tiled_scenes
-from gongsynth.sun.photosphere import model_photosphere, synthesize
+from gongsynth.sun.photosphere import DeferredStokes, model_photosphere
 
 __all__ = ["Stage", "Chain", "build_chain", "interactive", "run_header", "unmeasured", "SKY_FRACTION"]
 
@@ -236,11 +236,12 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False):
     else:
         if stokes is None:
             def synthesis(photosphere):
-                return {"stokes": synthesize(photosphere, mu=pointing.mu,
-                                             los_azimuth=pointing.los_azimuth, instrument=inst)}
+                # Deferred: the channels stage synthesises it block by block, never whole.
+                return {"stokes": DeferredStokes(photosphere, mu=pointing.mu,
+                                                 los_azimuth=pointing.los_azimuth, instrument=inst)}
 
             stages.append(Stage("synthesis", ("photosphere",), ("stokes",), synthesis,
-                                "Milne-Eddington Stokes spectra at the pointing's mu"))
+                                "Milne-Eddington Stokes spectra at the pointing's mu (deferred)"))
         else:
             pointing.check_mu(stokes.mu)
 
@@ -259,7 +260,7 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False):
             return {"light": light, "truth_scene": truth}
 
         stages.append(Stage("channels", ("stokes",), ("channels",), channels,
-                            "Mueller matrix and filter weights: spectra -> six planes"))
+                            "Mueller matrix and filter weights: spectra -> six planes (block by block)"))
         stages.append(Stage("scene", ("channels", "stokes"), ("light", "truth_scene"), scene,
                             "the planes tiled on the sky at the pointing"))
 

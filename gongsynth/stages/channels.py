@@ -26,6 +26,7 @@ import numpy as np
 from gongsynth.instrument import resolve_instrument
 from gongsynth.planes import N_CHANNELS, N_PLANES, N_POLARISATIONS
 from gongsynth.stages.filters import channel_weights
+from gongsynth.sun.photosphere import DeferredStokes
 from gongsynth.validation import check_finite
 
 __all__ = ["CHANNEL_UNIT", "IDEAL_MUELLER", "analyser_coefficients", "polarized_spectra",
@@ -163,8 +164,10 @@ def channel_images(stokes, *, mueller=None, instrument=None):
 
     Parameters
     ----------
-    stokes : `~gongsynth.sun.stokes.StokesCube`
-        Spectral radiance at the Sun (ny, nx, nλ).
+    stokes : `~gongsynth.sun.stokes.StokesCube` or `~gongsynth.sun.photosphere.DeferredStokes`
+        Spectral radiance at the Sun (ny, nx, nλ).  A deferred cube is
+        synthesised and collapsed `_BLOCK_SPECTRA` columns at a time, with the
+        same result as its whole cube.
     mueller : array_like, optional
         Dimensionless instrument Mueller matrix applied before the I±V
         analysis: (4, 4), per wavelength (nλ, 4, 4) or per pixel (ny, nx, 4, 4).
@@ -190,6 +193,9 @@ def channel_images(stokes, *, mueller=None, instrument=None):
     ((6, 2, 3), Unit("erg / (s sr cm2)"))
     """
     inst = resolve_instrument(instrument)
+    if isinstance(stokes, DeferredStokes):
+        # Synthesised and collapsed a block of rows at a time: the cube is never held whole.
+        return _deferred_channel_images(stokes, mueller, inst)
     coeff, kind = _coefficients_for(stokes, mueller)
     weights = channel_weights(stokes.wavelength, inst).to_value(u.cm)  # (3, nλ)
     ny, nx, nl = stokes.shape
@@ -213,3 +219,18 @@ def channel_images(stokes, *, mueller=None, instrument=None):
                 c = coeff[p, s] if kind == "global" else coeff[:, :, p, s].reshape(-1)[rows]
                 out[p * N_CHANNELS:(p + 1) * N_CHANNELS, rows] += c * integ
     return u.Quantity(out.reshape(N_PLANES, ny, nx), CHANNEL_UNIT, copy=False)
+
+
+def _deferred_channel_images(stokes, mueller, inst):
+    """`channel_images` of a `DeferredStokes`, block by block of whole rows."""
+    ny, nx, nl = stokes.shape
+    m = None if mueller is None else _check_mueller(mueller)
+    if m is not None and m.ndim == 3 and m.shape[0] != nl:
+        raise ValueError(f"a per-wavelength mueller must have shape ({nl}, 4, 4), got {m.shape}")
+    if m is not None and m.ndim == 4 and m.shape[:2] != (ny, nx):
+        raise ValueError(f"a per-pixel mueller must have shape ({ny}, {nx}, 4, 4), got {m.shape}")
+    out = np.empty((N_PLANES, ny, nx))
+    for rows, cube in stokes.blocks(_BLOCK_SPECTRA):
+        block_mueller = m[rows] if m is not None and m.ndim == 4 else m
+        out[:, rows] = channel_images(cube, mueller=block_mueller, instrument=inst).value
+    return u.Quantity(out, CHANNEL_UNIT, copy=False)

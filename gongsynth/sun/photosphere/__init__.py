@@ -4,13 +4,19 @@ The built-in photosphere and its Milne–Eddington Ni I 676.8 nm spectra.
 - `Photosphere`: field vector, velocity and continuum per column.
 - `model_photosphere`: a seeded, periodic model of a sunspot in its
   surroundings, like the paper's MURaM snapshot.
-- `synthesize`: Milne–Eddington Stokes spectra → `~gongsynth.sun.stokes.StokesCube`.
+- `synthesize`: Milne–Eddington Stokes spectra → `~gongsynth.sun.stokes.StokesCube`;
+  `DeferredStokes`: the same, synthesised block by block when needed.
 - `NiLine`: the line's Milne–Eddington parameters and the continuum limb darkening.
 """
 from gongsynth.sun.photosphere.columns import Photosphere
 from gongsynth.sun.photosphere.line import NiLine
 from gongsynth.sun.photosphere.model import model_photosphere
-from gongsynth.sun.photosphere.synthesis import default_wavelength, synthesize, zeeman_splitting
+from gongsynth.sun.photosphere.synthesis import (
+    DeferredStokes,
+    default_wavelength,
+    synthesize,
+    zeeman_splitting,
+)
 
-__all__ = ["Photosphere", "NiLine", "model_photosphere", "synthesize", "default_wavelength",
+__all__ = ["Photosphere", "NiLine", "model_photosphere", "synthesize", "DeferredStokes", "default_wavelength",
            "zeeman_splitting"]

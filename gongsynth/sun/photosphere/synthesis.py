@@ -32,7 +32,7 @@ from gongsynth.sun.photosphere.line import NiLine
 from gongsynth.sun.stokes import RADIANCE_UNIT, StokesCube
 from gongsynth.validation import check_wavelength_grid
 
-__all__ = ["synthesize", "default_wavelength", "zeeman_splitting"]
+__all__ = ["synthesize", "DeferredStokes", "default_wavelength", "zeeman_splitting"]
 
 _METHODS = ("numba", "numpy")
 
@@ -200,6 +200,12 @@ def synthesize(photosphere, mu=1.0, wavelength=None, *, los_azimuth=-90 * u.deg,
     >>> round(float(1 - i.min() / i[0]), 2)        # central depth of a static column
     0.67
     """
+    inputs = _checked_inputs(photosphere, mu, wavelength, los_azimuth, instrument, line, method)
+    return _synthesize_rows(inputs, slice(None))
+
+
+def _checked_inputs(photosphere, mu, wavelength, los_azimuth, instrument, line, method):
+    """`synthesize`'s arguments checked and resolved, as a dict."""
     if not isinstance(photosphere, Photosphere):
         raise TypeError(f"photosphere must be a gongsynth.sun.photosphere.Photosphere, "
                         f"got {type(photosphere).__name__}")
@@ -213,10 +219,37 @@ def synthesize(photosphere, mu=1.0, wavelength=None, *, los_azimuth=-90 * u.deg,
         raise TypeError(f"line must be a NiLine or None, got {type(line).__name__}")
     wavelength = default_wavelength() if wavelength is None else wavelength
     check_wavelength_grid(wavelength, instrument.line_wavelength)
-    mu_checked, azimuth = check_geometry(mu, los_azimuth, photosphere.shape)
+    mu, azimuth = check_geometry(mu, los_azimuth, photosphere.shape)
     g = float(instrument.lande_g.to_value(u.one)) if line.lande_g is None else float(line.lande_g)
+    meta = {
+        "origin": "gongsynth.sun.photosphere.synthesize",
+        "method": f"Milne-Eddington ({method})",
+        "line_wavelength_nm": float(instrument.line_wavelength.to_value(u.nm)),
+        "lande_g": g,
+        "line": {f.name: (str(getattr(line, f.name)) if isinstance(getattr(line, f.name), u.Quantity)
+                          else getattr(line, f.name)) for f in dataclasses.fields(line)},
+        "mu": float(mu) if np.ndim(mu) == 0 else "per-column",
+        "los_azimuth_deg": (float(np.degrees(azimuth)) if np.ndim(azimuth) == 0 else "per-column"),
+        "photosphere": dict(photosphere.meta),
+    }
+    return dict(photosphere=photosphere, mu=mu, azimuth=azimuth, wavelength=wavelength, g=g, line=line,
+                instrument=instrument, method=method, meta=meta)
+
+
+def _rows_of(value, rows):
+    """A per-column (ny, nx) geometry array's rows; a scalar as it is."""
+    return value if np.ndim(value) == 0 else value[rows]
+
+
+def _synthesize_rows(inputs, rows):
+    """The StokesCube of the photosphere's ``rows`` (a slice) from `_checked_inputs`."""
+    photosphere = inputs["photosphere"]
+    if rows != slice(None):
+        photosphere = photosphere[rows]
+    mu, azimuth = _rows_of(inputs["mu"], rows), _rows_of(inputs["azimuth"], rows)
+    instrument, line, wavelength, method = (inputs[k] for k in ("instrument", "line", "wavelength", "method"))
     lam0 = instrument.line_wavelength.to_value(u.pm)
-    cols, b_par = _column_parameters(photosphere, mu_checked, azimuth, lam0, g, line)
+    cols, b_par = _column_parameters(photosphere, mu, azimuth, lam0, inputs["g"], line)
     vgrid = (wavelength.to_value(u.pm).astype(np.float64) - lam0) / line.doppler_width.to_value(u.pm)
     ny, nx = photosphere.shape
     out = [np.empty((ny, nx, vgrid.size), dtype=np.float32) for _ in range(4)]
@@ -230,22 +263,136 @@ def synthesize(photosphere, mu=1.0, wavelength=None, *, los_azimuth=-90 * u.deg,
     else:
         step = max(1, 1_000_000 // max(1, nx * vgrid.size))
         for start in range(0, ny, step):
-            rows = slice(start, min(ny, start + step))
-            for dst, src in zip(out, _numpy_rows(vgrid, cols, eta0, damping, rows)):
-                dst[rows] = src
+            block = slice(start, min(ny, start + step))
+            for dst, src in zip(out, _numpy_rows(vgrid, cols, eta0, damping, block)):
+                dst[block] = src
     del cols
-    meta = {
-        "origin": "gongsynth.sun.photosphere.synthesize",
-        "method": f"Milne-Eddington ({method})",
-        "line_wavelength_nm": float(instrument.line_wavelength.to_value(u.nm)),
-        "lande_g": g,
-        "line": {f.name: (str(getattr(line, f.name)) if isinstance(getattr(line, f.name), u.Quantity)
-                          else getattr(line, f.name)) for f in dataclasses.fields(line)},
-        "mu": float(mu_checked) if np.ndim(mu_checked) == 0 else "per-column",
-        "los_azimuth_deg": (float(np.degrees(azimuth)) if np.ndim(azimuth) == 0 else "per-column"),
-        "photosphere": dict(photosphere.meta),
-    }
     unit = RADIANCE_UNIT
     return StokesCube(*(u.Quantity(a, unit, copy=False) for a in out), wavelength,
-                      photosphere.pixel_size, mu=mu_checked,
-                      blos=u.Quantity(b_par.astype(np.float32), u.G, copy=False), meta=meta)
+                      photosphere.pixel_size, mu=mu, meta=inputs["meta"],
+                      blos=u.Quantity(b_par.astype(np.float32), u.G, copy=False))
+
+
+class DeferredStokes:
+    """
+    The Milne–Eddington spectra of a photosphere, synthesised when and where they are needed.
+
+    It stands for the `~gongsynth.sun.stokes.StokesCube` that `synthesize`
+    returns for the same arguments, and holds only the photosphere: `blocks`
+    yields that cube a few rows at a time (all that
+    `gongsynth.stages.channels.channel_images` needs, so a run never holds the
+    whole cube: 816 MiB at the default 1024² × 51), ``shape``, ``wavelength``,
+    ``pixel_size``, ``mu``, ``blos`` and ``meta`` are known without
+    synthesis, and anything else (``I``, ``Q``, ``U``, ``V``, slicing, ...)
+    synthesises the whole cube once (`cube`) and is taken from it.  Every
+    column is synthesised independently, so block by block gives the same
+    bits as all at once.
+
+    Parameters
+    ----------
+    photosphere, mu, wavelength, los_azimuth, instrument, line, method
+        As in `synthesize`.
+
+    Examples
+    --------
+    >>> import numpy as np, astropy.units as u
+    >>> from gongsynth.sun.photosphere import Photosphere
+    >>> ones = np.ones((4, 3))
+    >>> ph = Photosphere(500 * ones * u.G, 0 * ones * u.deg, 0 * ones * u.deg, 0 * ones * u.km / u.s,
+    ...                  0 * ones * u.km / u.s, 0 * ones * u.km / u.s, ones, 96 * u.km)
+    >>> deferred = DeferredStokes(ph)
+    >>> deferred.shape, [rows for rows, _ in deferred.blocks(columns=6)]
+    ((4, 3, 51), [slice(0, 2, None), slice(2, 4, None)])
+    >>> bool(np.array_equal(deferred.I, synthesize(ph).I))
+    True
+    """
+
+    def __init__(self, photosphere, mu=1.0, wavelength=None, *, los_azimuth=-90 * u.deg, instrument=None,
+                 line=None, method="numba"):
+        self._inputs = _checked_inputs(photosphere, mu, wavelength, los_azimuth, instrument, line, method)
+        self._cube = None
+        self._blos = None
+
+    @property
+    def shape(self):
+        """(ny, nx, nλ)."""
+        return self._inputs["photosphere"].shape + (self._inputs["wavelength"].size,)
+
+    @property
+    def wavelength(self):
+        """The wavelength grid (nm)."""
+        return self._inputs["wavelength"].to(u.nm)
+
+    @property
+    def pixel_size(self):
+        """Horizontal size of one column (km)."""
+        return self._inputs["photosphere"].pixel_size.to(u.km)
+
+    @property
+    def mu(self):
+        """Cosine of the viewing angle: a float, or (ny, nx)."""
+        return self._inputs["mu"]
+
+    @property
+    def meta(self):
+        """Provenance, as the cube's."""
+        return self._inputs["meta"]
+
+    @property
+    def blos(self):
+        """True line-of-sight field B·n (ny, nx), float32, in G: the cube's ``blos``."""
+        if self._blos is None:
+            inputs = self._inputs
+            lam0 = inputs["instrument"].line_wavelength.to_value(u.pm)
+            _, b_par = _column_parameters(inputs["photosphere"], inputs["mu"], inputs["azimuth"], lam0,
+                                          inputs["g"], inputs["line"])
+            self._blos = u.Quantity(b_par.astype(np.float32), u.G, copy=False)
+        return self._blos
+
+    def blocks(self, columns=65536):
+        """
+        Yield the cube a block of whole rows at a time.
+
+        Parameters
+        ----------
+        columns : int
+            Columns per block (rounded to whole rows, at least one): the
+            block's cube takes ``16 × nλ`` bytes per column.
+
+        Yields
+        ------
+        rows : slice
+            The block's rows.
+        cube : `~gongsynth.sun.stokes.StokesCube`
+            Their spectra (``cube[rows]`` of the whole cube, bit for bit).
+        """
+        ny, nx = self._inputs["photosphere"].shape
+        step = max(1, int(columns) // nx)
+        for start in range(0, ny, step):
+            rows = slice(start, min(ny, start + step))
+            yield rows, _synthesize_rows(self._inputs, rows)
+
+    def cube(self):
+        """
+        The whole `~gongsynth.sun.stokes.StokesCube` (synthesised on the first call, then kept).
+
+        Returns
+        -------
+        `~gongsynth.sun.stokes.StokesCube`
+        """
+        if self._cube is None:
+            self._cube = _synthesize_rows(self._inputs, slice(None))
+        return self._cube
+
+    def __getattr__(self, name):
+        if name.startswith("_"):
+            raise AttributeError(name)
+        return getattr(self.cube(), name)
+
+    def __getitem__(self, key):
+        return self.cube()[key]
+
+    def __repr__(self):
+        ny, nx, nl = self.shape
+        held = "held" if self._cube is not None else "not synthesised"
+        return f"<DeferredStokes {ny}×{nx}×{nl}, Milne-Eddington, {held}>"
