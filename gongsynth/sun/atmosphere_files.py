@@ -258,7 +258,8 @@ def read_art(path):
         if missing:
             raise ValueError(f"{path}: not an ART model file, missing dataset(s) {missing}")
         temp, rho, ne = (np.asarray(f[k][0], dtype=np.float32) for k in ("temperature", "dens", "xne"))
-        z = np.asarray(f["z"][0] if f["z"].ndim > 1 else f["z"][:], dtype=np.float64).ravel() * 1e-5
+        zset = f["z"]
+        z = np.asarray(zset[0, 0, 0, :] if zset.ndim == 4 else zset[...], dtype=np.float64).ravel() * 1e-5
         dx = np.diff(np.asarray(f["dx"][:], dtype=np.float64).ravel())
     pixel = float(np.median(dx)) * 1e-5 if dx.size else 1.0
     warnings.warn(f"{path}: the ART model has no velocity or magnetic field; both set to zero", stacklevel=3)
