@@ -196,3 +196,28 @@ def test_bad_input():
 def test_module_exports():
     for name in fulldisk.__all__:
         assert hasattr(fulldisk, name)
+
+
+def test_float32_full_disk_optics_leave_b_and_v_unchanged():
+    """The float32 scene through the float32 optics: B and v within 0.01 G and 0.01 m/s of float64."""
+    from gongsynth.stages import optics
+    from gongsynth.stages.reduction import reduce
+    from gongsynth.sun.photosphere import model_photosphere
+    inst = GONGInstrument(plate_scale=20 * u.arcsec, psf_radius=150 * u.arcsec)
+    ph = model_photosphere(shape=(128, 128), pixel_size=3000 * u.km, seed=2)
+    light, truth = full_disk_scene(ph, instrument=inst, detector_shape=112)
+    assert light.data.dtype == np.float32 and truth.data.dtype == np.float32
+    counts, _, truth_psf = optics.image_scene(light, truth, inst)
+    kernel = optics.psf_kernel(light.pixel_scale, inst)
+    want = optics.pixelize(optics.convolve(light.data.value.astype(np.float64), kernel, boundary="zero"),
+                           light.pixel_scale, instrument=inst) * optics.photometric_factor(inst).value
+    on = disk_geometry((112, 112), inst.plate_scale).on_disk
+    assert np.max(np.abs(counts.value - want)[:, on]) < 1e-6 * want.max()
+    got, ref = reduce(counts.value), reduce(want)
+    d_b = np.abs(got.magnetogram - ref.magnetogram).to_value(u.G)[on]
+    d_v = np.abs(got.doppler - ref.doppler).to_value(u.m / u.s)[on]
+    assert np.max(np.abs(ref.magnetogram.to_value(u.G))[on]) > 500
+    assert d_b.max() < 0.01 and d_v.max() < 0.01
+    b64 = optics.observe(truth.data.value.astype(np.float64), light.pixel_scale, instrument=inst,
+                         boundary="zero")
+    assert np.max(np.abs(truth_psf.value - b64)) < 0.01

@@ -151,10 +151,10 @@ def full_disk_scene(source, *, obstime=None, instrument=None, detector_shape=Non
     Returns
     -------
     light : `~gongsynth.stages.scene.scene.Scene`
-        Radiance at Earth per arcsec² (6, NY, NX), zero beyond the limb,
+        Radiance at Earth per arcsec² (6, NY, NX), float32, zero beyond the limb,
         boundary ``"zero"``, WCS centred on the Sun.
     truth : `~gongsynth.stages.scene.scene.Scene` or None
-        True B_LOS (NY, NX) in G at the same samples (0 beyond the limb).
+        True B_LOS (NY, NX) in G, float32, at the same samples (0 beyond the limb).
 
     Examples
     --------
@@ -192,8 +192,10 @@ def full_disk_scene(source, *, obstime=None, instrument=None, detector_shape=Non
     scale = inst.plate_scale / supersampling
     ny_tile, nx_tile = engine.shape
     pixel_km = engine.pixel_size.to_value(u.km)
-    light = np.zeros((N_PLANES,) + grid)
-    blos = np.zeros(grid)
+    # float32, like the tiled scene: radiance at Earth stored once, converted from float64 planes.
+    to_earth = radiance_at_earth(1 * CHANNEL_UNIT)
+    light = np.zeros((N_PLANES,) + grid, dtype=np.float32)
+    blos = np.zeros(grid, dtype=np.float32)
     have_truth = True
     blocks = list(_row_blocks(grid[0], grid[1], chunk_size))
     if progress:
@@ -206,7 +208,7 @@ def full_disk_scene(source, *, obstime=None, instrument=None, detector_shape=Non
         iy, ix = _column_index(g.x[g.on_disk], g.y[g.on_disk], ny_tile, nx_tile, pixel_km)
         planes, truth = engine(iy, ix, g.mu[g.on_disk], g.los_azimuth[g.on_disk])
         view = light[:, rows]
-        view[:, g.on_disk] = planes
+        view[:, g.on_disk] = planes * to_earth.value
         if truth is None:
             have_truth = False
         else:
@@ -216,9 +218,7 @@ def full_disk_scene(source, *, obstime=None, instrument=None, detector_shape=Non
         warnings.warn(
             f"{outside} on-disk samples have mu outside the cubes' range [{engine.mu[0]:.3g}, "
             f"{engine.mu[-1]:.3g}]: they use the nearest cube (no extrapolation)", stacklevel=2)
-    # In place: the scene is large.
-    light *= radiance_at_earth(1 * CHANNEL_UNIT).value
-    data = u.Quantity(light, radiance_at_earth(1 * CHANNEL_UNIT).unit, copy=False)
+    data = u.Quantity(light, to_earth.unit, copy=False)
     time = as_obstime(obstime)
     from sunpy.coordinates import Helioprojective, get_earth
     centre = SkyCoord(0 * u.arcsec, 0 * u.arcsec,
