@@ -42,7 +42,10 @@ from gongsynth.stages.channels import channel_images
 from gongsynth.stages.reduction import reduce
 from gongsynth.stages.scene.fulldisk import full_disk_scene
 from gongsynth.stages.scene.tiled import tiled_scenes
+from gongsynth.sun.atmosphere import Atmosphere
 from gongsynth.sun.photosphere import DeferredStokes, model_photosphere
+from gongsynth.sun.rt.synthesis import synthesize as rt_synthesize
+from gongsynth.sun.sampling import check_spectral_sampling
 
 __all__ = ["Stage", "Chain", "build_chain", "interactive", "run_header", "unmeasured", "SKY_FRACTION"]
 
@@ -191,9 +194,11 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False):
     Parameters
     ----------
     config : `~gongsynth.config.SimulationConfig`
-    stokes : `~gongsynth.StokesCube`, optional
-        Input spectra: replaces the built-in photosphere and its synthesis
-        (tiled mode only; their μ must match the latitude).
+    stokes : `~gongsynth.StokesCube` or `~gongsynth.Atmosphere`, optional
+        Input spectra (their μ must match the latitude, their wavelengths cover
+        what the channels need), or a model atmosphere synthesised by
+        `gongsynth.rt.synthesize` at the pointing's μ and azimuth: replaces the
+        built-in photosphere and its synthesis (tiled mode only).
     flat, dark : optional
         Detector flat and dark (see `gongsynth.stages.camera.integrate.integrate`);
         default the instrument's synthetic ones.
@@ -223,7 +228,7 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False):
                             "the built-in model photosphere (seeded)"))
     elif config.mode == "full-disk":
         raise ValueError("mode='full-disk' synthesises the built-in photosphere at every point's own "
-                         "viewing angle; it does not take a stokes cube")
+                         "viewing angle; it does not take a Stokes cube or an atmosphere")
 
     if config.mode == "full-disk":
         def disk_scene(photosphere):
@@ -242,8 +247,17 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False):
 
             stages.append(Stage("synthesis", ("photosphere",), ("stokes",), synthesis,
                                 "Milne-Eddington Stokes spectra at the pointing's mu (deferred)"))
+        elif isinstance(stokes, Atmosphere):
+            def radiative_transfer():
+                return {"stokes": rt_synthesize(stokes, mu=pointing.mu, azimuth=pointing.los_azimuth,
+                                                progress=progress)}
+
+            stages.append(Stage("synthesis", (), ("stokes",), radiative_transfer,
+                                "LTE Stokes radiative transfer of the atmosphere at the pointing's mu"))
         else:
             pointing.check_mu(stokes.mu)
+            # Before any work: a window too narrow or too coarse for the channel integrals is refused.
+            check_spectral_sampling(stokes.wavelength, inst, name="the Stokes cube's wavelength")
 
             def given():
                 return {"stokes": stokes}

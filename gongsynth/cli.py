@@ -89,6 +89,10 @@ def build_parser():
                      help="detector side in pixels (default 860)")
     sim.add_argument("--workers", type=_number(int, minimum=1), metavar="N",
                      help="parallel workers: threads for one run, Dask workers for a sweep")
+    sim.add_argument("--atmosphere", type=Path, metavar="PATH",
+                     help="a model atmosphere as the input Sun, synthesised by LTE radiative transfer: "
+                          "a MURaM snapshot folder, a gongsynth or ART HDF5 file (.h5), or a 1-D model "
+                          "(SIR .mod, Hazel .1d, RH .atmos)")
     sim.add_argument("--out", type=Path, required=True, help="output directory")
     sim.add_argument("--overwrite", action="store_true", help="replace existing output files")
     sim.add_argument("--quiet", action="store_true", help="no progress bars or messages")
@@ -145,6 +149,7 @@ def _run_simulate(args):
 
     config = _simulation_config(args)
     progress = not args.quiet
+    atmosphere = _read_atmosphere(args.atmosphere) if args.atmosphere else None
     state = {"written": [], "saving": None}
     try:
         if args.latitude and len(args.latitude) > 1:
@@ -161,8 +166,11 @@ def _run_simulate(args):
             for folder in folders:
                 check_output_folder(folder, overwrite=args.overwrite, name="--out")
             check_disk_space(configs, args.out)
-            results = simulate_many(latitudes=latitudes, config=config, workers=args.workers,
-                                    progress=progress)
+            if atmosphere is None:
+                results = simulate_many(latitudes=latitudes, config=config, workers=args.workers,
+                                        progress=progress)
+            else:  # each latitude synthesises the atmosphere along its own rays
+                results = (simulate(atmosphere, config=cfg, progress=progress) for cfg in configs)
             for result, folder in zip(results, folders):
                 state["saving"] = folder
                 result.save(folder, overwrite=args.overwrite)
@@ -172,7 +180,7 @@ def _run_simulate(args):
             check_resources(config)
             check_output_folder(args.out, overwrite=args.overwrite, name="--out")
             check_disk_space([config], args.out)
-            result = simulate(config=config, progress=progress)
+            result = simulate(atmosphere, config=config, progress=progress)
             state["saving"] = args.out
             paths = result.save(args.out, overwrite=args.overwrite)
             state["written"].append(args.out)
@@ -195,6 +203,22 @@ def _what_was_written(state):
     if pending is not None:
         text += f"{pending} was left as it was before this run (no partial set)"
     return text.rstrip("; ")
+
+
+def _read_atmosphere(path):
+    """The Atmosphere in ``path``, with the reader chosen by its form (folder, HDF5, 1-D model)."""
+    from gongsynth.sun.atmosphere import Atmosphere
+
+    if path.is_dir():
+        return Atmosphere.from_muram(path)
+    if not path.is_file():
+        raise FileNotFoundError(2, "no such file or folder", str(path))
+    if path.suffix.lower() in (".h5", ".hdf5"):
+        try:
+            return Atmosphere.from_file(path)
+        except (KeyError, ValueError):  # not gongsynth's layout: the ART/Bifrost one
+            return Atmosphere.from_art(path)
+    return Atmosphere.from_1d(path)
 
 
 def _sweep_folder(out, latitude):

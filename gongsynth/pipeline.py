@@ -156,10 +156,11 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="bl
 
     Parameters
     ----------
-    stokes : `~gongsynth.StokesCube`, optional
+    stokes : `~gongsynth.StokesCube` or `~gongsynth.Atmosphere`, optional
         Input spectra (e.g. RH output of an MHD snapshot) at the viewing angle
-        of ``latitude``.  Default: the built-in model photosphere, synthesised
-        at that latitude.
+        of ``latitude``, or a model atmosphere (e.g. a MURaM snapshot) that
+        `gongsynth.rt.synthesize` turns into spectra at that viewing angle.
+        Default: the built-in model photosphere, synthesised at that latitude.
     latitude : `~astropy.units.Quantity`
         Heliographic latitude of the field centre on the central meridian.
     duration : `~astropy.units.Quantity`

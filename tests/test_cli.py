@@ -1,6 +1,7 @@
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from gongsynth.cli import main
@@ -85,3 +86,28 @@ def test_calibrate_a_real_synoptic_map(tmp_path, capsys):
     # Refuses to overwrite; a missing input is a usage error.
     assert main(["calibrate", str(source), "--out", str(out)]) == 3
     assert main(["calibrate", str(tmp_path / "none.fits"), "--out", str(tmp_path / "x.fits")]) == 2
+
+
+def test_a_muram_snapshot_as_the_input_sun(tmp_path, capsys):
+    # The genuine MURaM test snapshot (6 Mm box) through LTE radiative transfer and the instrument.
+    from gongsynth.config import SimulationConfig as Config
+
+    from .realdata import REAL_DATA
+
+    muram = REAL_DATA.parent / "mhd" / "muram-test3d-it000000"
+    if not muram.is_dir():
+        pytest.skip(f"MURaM snapshot not found at {muram}")
+    out = tmp_path / "muram"
+    code = main(["simulate", "--atmosphere", str(muram), "--shape", "16", "--duration", "1", "--seed", "3",
+                 "--quiet", "--out", str(out)])
+    assert code == 0
+    saved = Config.from_toml(out / "config.toml")
+    assert saved.seed == 3
+    import sunpy.map
+
+    magnetogram = sunpy.map.Map(out / "magnetogram.fits")
+    truth = sunpy.map.Map(out / "truth.fits")
+    assert magnetogram.data.shape == (16, 16)
+    # A quiet-Sun snapshot (net 10 G, |B| up to ~1 kG): finite maps and a truth within that range.
+    assert np.isfinite(magnetogram.data).any() and np.nanmax(np.abs(truth.data)) < 1500
+    assert main(["simulate", "--atmosphere", str(tmp_path / "none.h5"), "--out", str(tmp_path / "x")]) == 2

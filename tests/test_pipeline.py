@@ -300,3 +300,15 @@ def test_effects_reach_the_stages(disk_centre):
     assert np.nanstd(run(seeing=False).truth_psf.data) > np.nanstd(disk_centre.truth_psf.data)
     with pytest.raises(ValueError, match="effects.flat is off"):
         run(user_flat=np.ones((96, 96)), flat=False)
+
+
+def test_a_cube_too_narrow_for_the_channels_is_refused_before_any_work(disk_centre):
+    # Issue 12 #2: a 3-point window gave a mean of 606 G instead of 172 G, silently.
+    from gongsynth import StokesCube
+
+    cfg = disk_centre.config
+    stokes = build_chain(cfg).run(until="synthesis", progress=False)["stokes"]
+    narrow = stokes[:, :, 24:27]
+    assert isinstance(narrow, StokesCube)
+    with pytest.raises(ValueError, match="wavelength"):
+        gongsynth.simulate(narrow, config=cfg, progress=False)
