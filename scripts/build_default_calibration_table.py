@@ -18,6 +18,7 @@ built-in Sun; they will change when a more realistic input Sun (3-D
 atmospheres through radiative transfer) becomes the default.
 """
 import argparse
+import subprocess
 from pathlib import Path
 
 import astropy.units as u
@@ -36,6 +37,12 @@ def main(argv=None):
     parser.add_argument("--overwrite", action="store_true")
     args = parser.parse_args(argv)
     table = build_calibration_table(TABLE_LATITUDES, seeds=SEEDS, n_boot=50, progress=True)
+    # An editable install's version string does not follow later commits: record the commit too.
+    here = Path(__file__).resolve().parent
+    commit = subprocess.run(["git", "describe", "--always", "--dirty"], cwd=here, capture_output=True,
+                            text=True).stdout.strip()
+    if commit:
+        table.meta["git_commit"] = commit
     write_calibration_table(table, args.out, overwrite=args.overwrite)
     for row in table:
         print(f"{row['latitude'].to_value(u.deg):4.0f} deg  {row['region']:8s} "
