@@ -1,6 +1,7 @@
 """
 Will a run fit?  Its memory estimated from the configuration, before anything is computed.
 """
+import math
 import os
 import shutil
 from pathlib import Path
@@ -29,12 +30,14 @@ def estimate_memory(config):
     """
     An upper estimate of the peak memory a run needs, from its configuration alone.
 
-    The terms are the run's largest arrays: the Stokes cube of the built-in
-    photosphere (float32, 4 × 51 wavelengths per column) and the photosphere's
-    fields, the supersampled scene (six float64 planes plus the truth, with
-    the FFT work arrays of the optics), the detector-sized camera and product
-    arrays, the camera's frame schedule and the loaded libraries (300 MB);
-    their sum times 1.1.
+    The run holds its largest arrays in two phases that do not overlap: the
+    built-in photosphere model's temporaries (450 bytes per column), then the
+    photosphere and its channel images (110 bytes per column) with the
+    supersampled scene (six float32 planes plus the truth; the Stokes cube is
+    synthesised block by block and never held) and the optics' float32 work
+    arrays on the padded grid.  To the larger of the two it adds the
+    detector-sized camera and product arrays, the camera's frame schedule and
+    the loaded libraries (300 MB); the sum times 1.1.
 
     Calibrated against the peak resident memory (``/usr/bin/time -v``, seed 1,
     Python 3.12, Linux) of these runs:
@@ -42,15 +45,14 @@ def estimate_memory(config):
     ========================================  ==========  ==========
     run                                       measured    estimate
     ========================================  ==========  ==========
-    default (860 px, 10 min)                  3.58 GB     4.21 GB
-    default, 1 min                            3.58 GB     4.20 GB
-    ``--shape 430 --duration 1``              1.98 GB     2.17 GB
-    ``--shape 256 --duration 1``              1.57 GB     1.74 GB
-    ``--mode full-disk --duration 1``         2.79 GB     3.26 GB
+    default (860 px, 10 min)                  1.48 GB     1.87 GB
+    ``--shape 430 --duration 1``              0.80 GB     0.91 GB
+    ``--shape 256 --duration 1``              0.78 GB     0.87 GB
+    ``--mode full-disk --duration 1``         1.35 GB     1.87 GB
     ========================================  ==========  ==========
 
-    (before calibration the estimate was 4.68 GB for the default run: the
-    cube was counted twice).
+    (before issue 17's streaming and float32 optics: 3.58 GB for the default
+    run, 2.79 GB for the full disk).
 
     Parameters
     ----------
@@ -65,19 +67,22 @@ def estimate_memory(config):
     --------
     >>> from gongsynth.config import SimulationConfig
     >>> print(f"{estimate_memory(SimulationConfig(seed=0)).to(u.GB):.2f}")
-    4.21 Gbyte
+    1.87 Gbyte
     """
     inst = config.instrument
     columns = config.photosphere_shape[0] * config.photosphere_shape[1]
-    stokes = 4 * 4 * _N_WAVELENGTHS * columns + 200 * columns  # the float32 cube + photosphere fields
-    if config.mode == "full-disk":
-        stokes = 200 * columns  # synthesised in chunks at every point's own mu
-    grid = (config.detector_pixels * inst.supersampling) ** 2
-    scene = 8 * grid * (7 + 2 * 4)  # 6 planes + truth, float64, and complex FFT work arrays
+    model = 450 * columns  # the photosphere model's temporaries
+    side = config.detector_pixels * inst.supersampling
+    grid = side ** 2
+    reach = 2 * math.ceil((inst.psf_radius / inst.plate_scale).to_value(u.one) * inst.supersampling)
+    padded = (side + reach) ** 2
+    # Photosphere and channels, 6 planes + truth in float32, and the optics' float32 work
+    # arrays (padded plane, half spectrum, transfer function, common part, a difference).
+    scene = 110 * columns + 4 * grid * 7 + 4 * padded * 6
     detector = 8 * config.detector_pixels ** 2 * 40
     frames = int((config.duration * inst.frame_rate).to_value(u.one))
     schedule = _SCHEDULE_BYTES_PER_FRAME * frames
-    return _MARGIN * (stokes + scene + detector + schedule + 300e6) * u.byte  # + the loaded libraries
+    return _MARGIN * (max(model, scene) + detector + schedule + 300e6) * u.byte  # + the loaded libraries
 
 
 def available_memory():

@@ -445,16 +445,17 @@ def expected_counts(scene, instrument=None, *, psf=True, seeing=True, workers=No
     radiance = check_quantity(scene.data, u.erg / (u.s * u.cm**2 * u.arcsec**2), "scene.data")
     planes = observe(radiance, scene.pixel_scale, instrument=inst, psf=psf, seeing=seeing,
                      boundary=scene.boundary, workers=workers)
-    return _counts(planes, inst)
+    return _counts(planes, inst, radiance.dtype)
 
 
-def _counts(planes, inst):
+def _counts(planes, inst, dtype):
     """Detector-pixel radiances (a Quantity) to expected electrons per frame."""
     counts = (planes * photometric_factor(inst)).to(u.electron)
-    # FFT convolution leaves round-off of either sign (~1e-16 of the peak) where
-    # the scene is dark (beyond the limb); counts cannot be negative, so those
-    # are zeroed.  Anything larger would be a real error and is left to fail.
-    tiny = 1e-9 * max(float(np.max(counts.value, initial=0.0)), 0.0)
+    # FFT convolution leaves round-off of either sign (~1e-16 of the peak, ~3e-7 for
+    # float32 planes) where the scene is dark (beyond the limb); counts cannot be
+    # negative, so those are zeroed.  Anything larger would be a real error and is left to fail.
+    rtol = 1e-5 if np.dtype(dtype) == np.float32 else 1e-9
+    tiny = rtol * max(float(np.max(counts.value, initial=0.0)), 0.0)
     counts[(counts.value < 0) & (counts.value > -tiny)] = 0 * u.electron
     return counts
 
@@ -520,7 +521,7 @@ def image_scene(light, truth=None, instrument=None, *, psf=True, seeing=True, wo
         counts = expected_counts(light, inst, psf=psf, seeing=seeing, workers=workers)
     else:
         planes = _image_planes(values, imager)
-        counts = _counts(u.Quantity(planes, radiance.unit, copy=False), inst)
+        counts = _counts(u.Quantity(planes, radiance.unit, copy=False), inst, values.dtype)
     if truth is None:
         return counts, None, None
     periodic = truth.boundary == "periodic"
