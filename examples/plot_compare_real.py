@@ -1,7 +1,7 @@
 """
-==========================================================
+======================================================
 A GONG-resolution magnetogram next to a real one (MDI)
-==========================================================
+======================================================
 
 `gongsynth.compare` puts a simulated GONG magnetogram next to a real
 observation, measured the same way.  The real map here is a SOHO/MDI 96-minute

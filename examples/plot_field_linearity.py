@@ -1,7 +1,7 @@
 """
-===============================================
+=============================================
 How GONG measures a magnetic field: linearity
-===============================================
+=============================================
 
 GONG infers the line-of-sight field from the Zeeman shift between the line
 seen in I+V and in I−V.  This example pushes a Ni I 676.8 nm line through the

@@ -1,7 +1,7 @@
 """
-=====================================
+===============================
 The GONG camera, frame by frame
-=====================================
+===============================
 
 GONG's camera takes 60 frames a second while a half-wave plate turns 30° per
 frame and a liquid-crystal retarder (LCVR) flips between I+V and I−V every

@@ -1,7 +1,7 @@
 """
-=====================================================
+===================================================
 The built-in model photosphere and its Ni I spectra
-=====================================================
+===================================================
 
 gongsynth ships a model of the paper's MURaM box: a 98 Mm × 98 Mm periodic
 patch of the Sun at 96 km with a sunspot, plage, network, internetwork field

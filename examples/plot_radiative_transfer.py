@@ -1,7 +1,7 @@
 """
-=====================================================
+======================================================
 LTE Stokes synthesis of a MURaM snapshot at 0° and 60°
-=====================================================
+======================================================
 
 `gongsynth.rt.synthesize` solves the polarised transfer equation of Ni I
 676.78 nm along straight rays through a 3-D MURaM box (the MURaM code's own
