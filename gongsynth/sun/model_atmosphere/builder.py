@@ -99,16 +99,16 @@ def reference_stratifications(z_grid, granulation="brc", amplitude=1.0, element_
     names = [ELEMENT_MODELS[element_model], UMBRA_MODELS[umbra_model], "penumbra"]
     t_all = np.concatenate([t_mean[None], t_q, np.stack([st.model_temperature(n) for n in names])])
     z, p, _ = st.tau_scale_family(t_all, lt)
-    # Horizontal pressure balance at the mean model's log tau = 1 depth fixes each quiet member's height.
-    z_match, lnp_match = z[0, 0], math.log(p[0, 0])
-    shift_q = np.array([z_match - np.interp(lnp_match, np.log(pm)[::-1], zm[::-1])
-                        for zm, pm in zip(z[1:1 + _A_TABLE.size], p[1:1 + _A_TABLE.size])])
-    t_grid, lnp_grid = st.place_on_grid(zg, z[:1 + _A_TABLE.size], t_all[:1 + _A_TABLE.size],
-                                        p[:1 + _A_TABLE.size], np.concatenate([[0.0], shift_q]))
+    # Horizontal pressure balance at the mean model's log tau = 1 depth fixes each quiet member's height
+    # (found on the hydrostatically extended grid: the hot members reach that pressure below their table).
+    nq = 1 + _A_TABLE.size
+    lnp_match = math.log(p[0, 0])
+    _, lnp0 = st.place_on_grid(zg, z[:nq], t_all[:nq], p[:nq])
+    shift_q = np.array([z[0, 0] - np.interp(lnp_match, lp[::-1], zg[::-1]) for lp in lnp0[1:]])
+    t_grid, lnp_grid = st.place_on_grid(zg, z[:nq], t_all[:nq], p[:nq], np.concatenate([[0.0], shift_q]))
     mean_lnp = lnp_grid[0]
     out = dict(a=_A_TABLE.copy(), mean_t=t_grid[0], mean_lnp=mean_lnp, quiet_t=t_grid[1:], quiet_lnp=lnp_grid[1:],
                z_tau1_quiet=shift_q)
-    nq = 1 + _A_TABLE.size
     for i, (key, field) in enumerate((("tube", element_field), ("umbra", umbra_field),
                                       ("penumbra", penumbra_field))):
         j = nq + i
@@ -124,23 +124,52 @@ def reference_stratifications(z_grid, granulation="brc", amplitude=1.0, element_
 
 
 @nb.njit(parallel=True, cache=True)
-def _blend(a, f, su, sp, a0, da, q_t, q_lnp, tube_t, tube_lnp, u_t, u_lnp, p_t, p_lnp, temp, pres):
-    """T and P per (height, column) from the component weights (see the module docstring)."""
+def _blend(a, f, su, sp, a0, da, q_t, q_p, tube_t, tube_p, u_t, u_p, p_t, p_p, temp, pres):
+    """T and P per (height, column): area-weighted means of the components (see the module docstring)."""
     na, nz = q_t.shape
     ny, nx = a.shape
     for j in nb.prange(ny):
+        m = np.empty(nx, dtype=np.int64)
+        w = np.empty(nx)
+        q = np.empty(nx)
         for i in range(nx):
-            x = (a[j, i] - a0) / da
-            x = min(max(x, 0.0), na - 1.000001)
-            m = int(x)
-            w = x - m
-            ff, uu, pp = f[j, i], su[j, i], sp[j, i]
-            q = max(1.0 - ff - uu - pp, 0.0)
-            for k in range(nz):
-                tq = (1 - w) * q_t[m, k] + w * q_t[m + 1, k]
-                lq = (1 - w) * q_lnp[m, k] + w * q_lnp[m + 1, k]
-                temp[k, j, i] = q * tq + ff * tube_t[k] + uu * u_t[k] + pp * p_t[k]
-                pres[k, j, i] = math.exp(q * lq + ff * tube_lnp[k] + uu * u_lnp[k] + pp * p_lnp[k])
+            x = min(max((a[j, i] - a0) / da, 0.0), na - 1.000001)
+            m[i] = int(x)
+            w[i] = x - m[i]
+            q[i] = max(1.0 - f[j, i] - su[j, i] - sp[j, i], 0.0)
+        for k in range(nz):
+            for i in range(nx):
+                mi, wi = m[i], w[i]
+                tq = (1 - wi) * q_t[mi, k] + wi * q_t[mi + 1, k]
+                pq = (1 - wi) * q_p[mi, k] + wi * q_p[mi + 1, k]
+                temp[k, j, i] = q[i] * tq + f[j, i] * tube_t[k] + su[j, i] * u_t[k] + sp[j, i] * p_t[k]
+                pres[k, j, i] = q[i] * pq + f[j, i] * tube_p[k] + su[j, i] * u_p[k] + sp[j, i] * p_p[k]
+
+
+@nb.njit(parallel=True, cache=True)
+def _flow(h, s, fl, vz0, gx, gy, svx, svy, vel):
+    """v_z = h V, v_h = s ∇φ + (Evershed, moat) × their height profile."""
+    nz = h.size
+    ny, nx = vz0.shape
+    for j in nb.prange(ny):
+        for k in range(nz):
+            for i in range(nx):
+                vel[0, k, j, i] = s[k] * gx[j, i] + fl[k] * svx[j, i]
+                vel[1, k, j, i] = s[k] * gy[j, i] + fl[k] * svy[j, i]
+                vel[2, k, j, i] = h[k] * vz0[j, i]
+
+
+@nb.njit(parallel=True, cache=True)
+def _add_internetwork(c, dc, ax, ay, dazdx, dazdy, curl, mag):
+    """B += curl of A c(z) (see `~gongsynth.sun.model_atmosphere.flux_elements`)."""
+    nz = c.size
+    ny, nx = ax.shape
+    for j in nb.prange(ny):
+        for k in range(nz):
+            for i in range(nx):
+                mag[0, k, j, i] += c[k] * dazdy[j, i] - dc[k] * ay[j, i]
+                mag[1, k, j, i] += dc[k] * ax[j, i] - c[k] * dazdx[j, i]
+                mag[2, k, j, i] += c[k] * curl[j, i]
 
 
 def _scalar(q, unit, name, positive=True):
@@ -165,13 +194,13 @@ def _fraction(value, name, lo=0.0, hi=1.0):
 def model_atmosphere(shape=(256, 256), pixel_size=96 * u.km, *, seed, nz=80,
                      height_range=(-600, 700) * u.km, spot="auto", granule_size=1.3 * u.Mm,
                      granulation_models="brc", granulation_amplitude=1.0,
-                     granulation_velocity=2.0 * u.km / u.s, velocity_decay_height=200 * u.km,
+                     granulation_velocity=2.0 * u.km / u.s, velocity_decay_height=250 * u.km,
                      element_flux_density=20 * u.G, element_field=1500 * u.G, element_model="network",
                      positive_fraction=0.6, internetwork_field=10 * u.G,
                      internetwork_horizontal_field=50 * u.G, umbra_radius=7 * u.Mm,
                      penumbra_radius=16 * u.Mm, umbra_field=3000 * u.G, penumbra_field=1500 * u.G,
                      umbra_model="maltby-m", evershed_speed=2.0 * u.km / u.s, moat_speed=0.8 * u.km / u.s,
-                     microturbulence=0.0 * u.km / u.s):
+                     microturbulence=0.6 * u.km / u.s):
     """
     A seeded, horizontally periodic 3-D model photosphere for LTE Stokes synthesis.
 
@@ -320,8 +349,8 @@ def model_atmosphere(shape=(256, 256), pixel_size=96 * u.km, *, seed, nz=80,
     pres = np.empty_like(temp)
     a_clip = np.clip(a, _A_TABLE[0], _A_TABLE[-1])
     _blend(a_clip, f_el, sp["umbra"], sp["penumbra"], float(_A_TABLE[0]), float(_A_TABLE[1] - _A_TABLE[0]),
-           ref["quiet_t"], ref["quiet_lnp"], ref["tube_t"], ref["tube_lnp"], ref["umbra_t"], ref["umbra_lnp"],
-           ref["penumbra_t"], ref["penumbra_lnp"], temp, pres)
+           ref["quiet_t"], np.exp(ref["quiet_lnp"]), ref["tube_t"], np.exp(ref["tube_lnp"]), ref["umbra_t"],
+           np.exp(ref["umbra_lnp"]), ref["penumbra_t"], np.exp(ref["penumbra_lnp"]), temp, pres)
 
     # Velocity: anelastic granular flow outside the magnetic structures, Evershed and moat flows.
     h, s = anelastic_profile(zg, ref["density"], h_v)
@@ -332,10 +361,7 @@ def model_atmosphere(shape=(256, 256), pixel_size=96 * u.km, *, seed, nz=80,
     gx, gy = grid.gradient(grid.inverse_laplacian(vz0))
     vel = np.empty((3,) + temp.shape, dtype=np.float32)
     flows = np.exp(-np.maximum(zg, 0.0) / 150.0)          # Evershed/moat flows: strongest at tau = 1
-    for k in range(zg.size):
-        vel[0, k] = s[k] * gx + flows[k] * sp["vx"]
-        vel[1, k] = s[k] * gy + flows[k] * sp["vy"]
-        vel[2, k] = h[k] * vz0
+    _flow(h, s, flows, vz0, gx, gy, sp["vx"], sp["vy"], vel)
 
     # Magnetic field: potential continuation of the element and spot base planes + internetwork.
     rng = stage_generator(root, "model_atmosphere", _INTERNETWORK)
@@ -344,16 +370,16 @@ def model_atmosphere(shape=(256, 256), pixel_size=96 * u.km, *, seed, nz=80,
     ax, ay, az = (p_ * quiet_in for p_ in pots)
     dazdx, dazdy = grid.gradient(az)
     curl = grid.gradient(ay)[0] - grid.gradient(ax)[1]
-    pot = (ax, ay, az, dazdx, dazdy, curl)
-    spectra, bases = [grid.fft(bz_el)], [ref["z_tube"]]
+    pot = (ax, ay, dazdx, dazdy, curl)
+    spectra, bases = [grid.fft(bz_el).astype(np.complex64)], [ref["z_tube"]]
     if has_spot:
-        spectra.append(grid.fft(sp["bz"]))
+        spectra.append(grid.fft(sp["bz"]).astype(np.complex64))
         bases.append(ref["z_umbra"])
     mag = np.empty_like(vel)
     for k in range(zg.size):
-        bx, by, bz = fe.potential_layer(grid, spectra, bases, zg[k])
-        ix, iy, iz = fe.internetwork_layer(grid, pot, zg[k])
-        mag[0, k], mag[1, k], mag[2, k] = bx + ix, by + iy, bz + iz
+        mag[0, k], mag[1, k], mag[2, k] = fe.potential_layer(grid, spectra, bases, zg[k])
+    c, dc = fe.internetwork_profile(zg)
+    _add_internetwork(c, dc, *pot, mag)
 
     meta = {
         "origin": "gongsynth.model_atmosphere", "seed_entropy": str(root.entropy), "spot": has_spot,
@@ -371,5 +397,5 @@ def model_atmosphere(shape=(256, 256), pixel_size=96 * u.km, *, seed, nz=80,
                    "evershed_speed_km_s": v_e, "moat_speed_km_s": v_m, "microturbulence_km_s": v_t},
     }
     kms = u.km / u.s
-    return Atmosphere(temp * u.K, zg * u.km, px * u.km, gas_pressure=pres * u.Unit("dyn cm-2"),
-                      velocity=vel * kms, magnetic_field=mag * u.G, microturbulence=v_t * kms, meta=meta)
+    return Atmosphere(temp << u.K, zg * u.km, px * u.km, gas_pressure=pres << u.Unit("dyn cm-2"),
+                      velocity=vel << kms, magnetic_field=mag << u.G, microturbulence=v_t * kms, meta=meta)

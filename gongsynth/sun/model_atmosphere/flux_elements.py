@@ -24,7 +24,7 @@ import math
 
 import numpy as np
 
-__all__ = ["power_law_fluxes", "render_elements", "potential_layer", "internetwork_layer",
+__all__ = ["power_law_fluxes", "render_elements", "potential_layer", "internetwork_profile",
            "internetwork_potentials", "INTERNETWORK_SCALE_KM", "INTERNETWORK_HEIGHT_KM"]
 
 #: Correlation length of the internetwork field (km) and the e-folding of its height profile.
@@ -140,7 +140,7 @@ def potential_layer(grid, spectra, heights, z, dtype=np.float32):
         if z <= zb:
             total_v = total_v + spec
         else:
-            e = spec * np.exp(-grid.k * (z - zb))
+            e = spec * np.exp(-grid.k * (z - zb)).astype(np.float32)
             total_v = total_v + e
             total_h = total_h + e
     bz = grid.ifft(total_v, dtype)
@@ -149,8 +149,8 @@ def potential_layer(grid, spectra, heights, z, dtype=np.float32):
         return zero, zero.copy(), bz
     k = grid.k.copy()
     k[0, 0] = 1.0
-    bx = grid.ifft(-1j * grid.kx / k * total_h, dtype)
-    by = grid.ifft(-1j * grid.ky / k * total_h, dtype)
+    bx = grid.ifft((-1j * grid.kx / k).astype(np.complex64) * total_h, dtype)
+    by = grid.ifft((-1j * grid.ky / k).astype(np.complex64) * total_h, dtype)
     return bx, by, bz
 
 
@@ -180,27 +180,27 @@ def internetwork_potentials(grid, rng, vertical_rms, horizontal_rms):
     return ax, ay, az
 
 
-def internetwork_layer(grid, potentials, z, dtype=np.float32):
+def internetwork_profile(z):
     """
-    Internetwork field at height ``z`` from its vector potential (divergence-free).
+    Height profile c(z) = exp(−z²/2H²) of the internetwork vector potential and its derivative.
 
     Parameters
     ----------
-    grid : `~gongsynth.sun.model_atmosphere.granulation.PeriodicGrid`
-    potentials : tuple
-        From `internetwork_potentials` (plus their gradients, see the builder): (A_x, A_y, A_z,
-        ∂_x A_z, ∂_y A_z, ∂_x A_y − ∂_y A_x).
-    z : float
+    z : array_like
         km.
-    dtype : numpy dtype
 
     Returns
     -------
-    bx, by, bz : `numpy.ndarray`
-        G.
+    c, dc : `numpy.ndarray`
+        c and dc/dz (per km).
+
+    Examples
+    --------
+    >>> c, dc = internetwork_profile([0.0, 300.0])
+    >>> float(c[0]), float(dc[0])
+    (1.0, -0.0)
     """
-    ax, ay, _, dazdx, dazdy, curl = potentials
+    z = np.asarray(z, dtype=np.float64)
     h = INTERNETWORK_HEIGHT_KM
-    c = math.exp(-0.5 * (z / h) ** 2)
-    dc = -z / h ** 2 * c
-    return ((c * dazdy - dc * ay).astype(dtype), (dc * ax - c * dazdx).astype(dtype), (c * curl).astype(dtype))
+    c = np.exp(-0.5 * (z / h) ** 2)
+    return c, -z / h ** 2 * c

@@ -138,7 +138,7 @@ def granulation_pattern(grid, rng, granule_size):
     y, x = grid.coords()
     pts = np.column_stack([np.broadcast_to(x, (grid.ny, grid.nx)).ravel(),
                            np.broadcast_to(y, (grid.ny, grid.nx)).ravel()])
-    d, idx = tree.query(pts, k=2)
+    d, idx = tree.query(pts, k=2, workers=-1)
     sep = seeds[idx[:, 1]] - seeds[idx[:, 0]]
     sep[:, 0] = (sep[:, 0] + grid.Lx / 2) % grid.Lx - grid.Lx / 2
     sep[:, 1] = (sep[:, 1] + grid.Ly / 2) % grid.Ly - grid.Ly / 2
