@@ -28,6 +28,7 @@ LAYERS = (
     ("gongsynth.sun", "gongsynth.sun.atmosphere_files", "gongsynth.sun.atmosphere"),
     ("gongsynth.sun.rt", "gongsynth.sun.rt.kernels", "gongsynth.sun.rt.rays", "gongsynth.sun.rt.truth",
      "gongsynth.sun.rt.synthesis"),
+    ("gongsynth.sun.model_atmosphere",),
     ("gongsynth.stages", "gongsynth.stages.filters"),
     ("gongsynth.stages.channels",),
     ("gongsynth.stages.scene",),

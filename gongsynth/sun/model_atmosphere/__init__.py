@@ -1,0 +1,13 @@
+"""
+A built-in, seeded 3-D model Sun: granulation, hot kG flux elements, internetwork field and a sunspot.
+
+One job per module, in data-flow order: `tables` (the 1-D semi-empirical
+T(log τ) models, with sources), `stratification` (their hydrostatic
+equilibrium and placement on a geometric grid), `granulation` (the periodic
+grid, the granular pattern and its anelastic flow), `flux_elements` (kG
+elements, potential spreading, internetwork field), `sunspot` (umbra,
+penumbra, Evershed and moat flows) and `builder` (`model_atmosphere`).
+"""
+from gongsynth.sun.model_atmosphere.builder import model_atmosphere
+
+__all__ = ["model_atmosphere"]

@@ -1,0 +1,401 @@
+r"""
+`model_atmosphere`: the built-in, seeded 3-D model Sun (granulation, kG elements, internetwork, a sunspot).
+
+Every column is a blend of 1-D semi-empirical stratifications, each in
+hydrostatic equilibrium on its own τ₅₀₀ scale and placed on the common
+geometric grid (`~gongsynth.sun.model_atmosphere.stratification`):
+
+- **quiet Sun**: T(log τ) = T_HSRA + a ΔT with ΔT half the granule −
+  intergranule difference of a two-component model (Ruiz Cobo et al. 1995:
+  +180 K at τ = 1, ~0 at log τ = −1, weakly reversed above; or Borrero &
+  Bellot Rubio 2002) and a the granulation's thermal weight
+  (`~gongsynth.sun.model_atmosphere.granulation`); each member is shifted so
+  that all have the HSRA's gas pressure at its log τ = 1 depth (horizontal
+  pressure balance below the surface), which raises the granules' τ = 1
+  above the lanes' (the corrugation, reported in ``meta``);
+- **kG elements**: the network (or plage) flux-tube model of Solanki, sunk by
+  the Wilson depression W that pressure balance P_int + B₀²/8π = P_ext at
+  equal geometric height gives at the tube's τ = 1; weight f = |B_z|/B₀ of
+  the element field on that plane (a filling factor, ≤ 1);
+- **sunspot**: Maltby et al. (1986) M umbra and the del Toro Iniesta et al.
+  (1994) penumbra, each placed by the same pressure balance with the umbral /
+  penumbral field strength.
+
+T and ln P are blended with these weights (a weighted geometric mean of
+hydrostatic pressures).  The field is the potential continuation of the
+element and spot base planes plus the divergence-free internetwork field
+(`~gongsynth.sun.model_atmosphere.flux_elements`); the granular flow is
+anelastic and is suppressed inside elements and the spot, where the Evershed
+and moat flows of `~gongsynth.sun.model_atmosphere.sunspot` take over.
+"""
+from __future__ import annotations
+
+import functools
+import math
+
+import astropy.units as u
+import numba as nb
+import numpy as np
+
+from gongsynth.seeding import as_seed_sequence, stage_generator
+from gongsynth.sun.atmosphere import Atmosphere
+from gongsynth.sun.model_atmosphere import flux_elements as fe
+from gongsynth.sun.model_atmosphere import stratification as st
+from gongsynth.sun.model_atmosphere.granulation import PeriodicGrid, anelastic_profile, granulation_pattern
+from gongsynth.sun.model_atmosphere.sunspot import spot_structure
+from gongsynth.sun.rt.eos import solve_state
+from gongsynth.validation import check_quantity
+
+__all__ = ["model_atmosphere", "reference_stratifications", "GRANULATION_MODELS", "ELEMENT_MODELS",
+           "UMBRA_MODELS"]
+
+GRANULATION_MODELS = {"brc": ("granule_brc", "intergranule_brc"), "bbr": ("granule_bbr", "intergranule_bbr")}
+ELEMENT_MODELS = {"network": "network", "plage": "plage"}
+UMBRA_MODELS = {"maltby-m": "umbra_m", "maltby-e": "umbra_e"}
+
+#: Thermal weights a tabulated (interpolated linearly in between; a is clipped to this range).
+_A_TABLE = np.linspace(-4.0, 4.0, 33)
+# Random sub-streams: each ingredient its own, so switching one off leaves the others unchanged.
+_GRANULES, _ELEMENTS, _INTERNETWORK, _SPOT = range(4)
+
+
+@functools.lru_cache(maxsize=8)
+def reference_stratifications(z_grid, granulation="brc", amplitude=1.0, element_model="network",
+                              element_field=1500.0, umbra_model="maltby-m", umbra_field=3000.0,
+                              penumbra_field=1500.0):
+    """
+    The 1-D components on the height grid (cached: they depend only on these arguments).
+
+    Parameters
+    ----------
+    z_grid : tuple of float
+        Heights (km).
+    granulation, element_model, umbra_model : str
+        Keys of `GRANULATION_MODELS`, `ELEMENT_MODELS`, `UMBRA_MODELS`.
+    amplitude : float
+        Scale of the granulation's ΔT.
+    element_field, umbra_field, penumbra_field : float
+        G at each model's own τ = 1 (for the pressure balance).
+
+    Returns
+    -------
+    dict
+        ``quiet_t``, ``quiet_lnp`` (na, nz) on the thermal weights ``a``; ``tube_*``,
+        ``umbra_*``, ``penumbra_*``, ``mean_*`` (nz,); the heights of each component's τ = 1
+        (``z_tau1_quiet`` per a, ``z_tube``, ``z_umbra``, ``z_penumbra``) and ``density`` (mean ρ̄(z)).
+
+    Examples
+    --------
+    >>> ref = reference_stratifications(tuple(np.linspace(-600, 700, 66)))
+    >>> bool(ref["z_tube"] < 0), bool(ref["z_umbra"] < -200)
+    (True, True)
+    """
+    zg = np.asarray(z_grid, dtype=np.float64)
+    lt = st.LOG_TAU
+    t_mean = st.model_temperature("hsra")
+    gran, inter = GRANULATION_MODELS[granulation]
+    delta = 0.5 * (st.model_temperature(gran) - st.model_temperature(inter)) * amplitude
+    t_q = t_mean[None, :] + _A_TABLE[:, None] * delta[None, :]
+    names = [ELEMENT_MODELS[element_model], UMBRA_MODELS[umbra_model], "penumbra"]
+    t_all = np.concatenate([t_mean[None], t_q, np.stack([st.model_temperature(n) for n in names])])
+    z, p, _ = st.tau_scale_family(t_all, lt)
+    # Horizontal pressure balance at the mean model's log tau = 1 depth fixes each quiet member's height
+    # (found on the hydrostatically extended grid: the hot members reach that pressure below their table).
+    nq = 1 + _A_TABLE.size
+    lnp_match = math.log(p[0, 0])
+    _, lnp0 = st.place_on_grid(zg, z[:nq], t_all[:nq], p[:nq])
+    shift_q = np.array([z[0, 0] - np.interp(lnp_match, lp[::-1], zg[::-1]) for lp in lnp0[1:]])
+    t_grid, lnp_grid = st.place_on_grid(zg, z[:nq], t_all[:nq], p[:nq], np.concatenate([[0.0], shift_q]))
+    mean_lnp = lnp_grid[0]
+    out = dict(a=_A_TABLE.copy(), mean_t=t_grid[0], mean_lnp=mean_lnp, quiet_t=t_grid[1:], quiet_lnp=lnp_grid[1:],
+               z_tau1_quiet=shift_q)
+    for i, (key, field) in enumerate((("tube", element_field), ("umbra", umbra_field),
+                                      ("penumbra", penumbra_field))):
+        j = nq + i
+        p_tau1 = float(np.exp(np.interp(0.0, z[j], np.log(p[j]))))
+        depth = st.pressure_balance_depth(zg, mean_lnp, p_tau1, field)
+        t_k, lnp_k = st.place_on_grid(zg, z[j:j + 1], t_all[j:j + 1], p[j:j + 1], depth)
+        out[f"{key}_t"], out[f"{key}_lnp"], out[f"z_{key}"] = t_k[0], lnp_k[0], depth
+    out["density"] = solve_state(out["mean_t"], gas_pressure=np.exp(mean_lnp))["density"]
+    for v in out.values():
+        if isinstance(v, np.ndarray):
+            v.flags.writeable = False
+    return out
+
+
+@nb.njit(parallel=True, cache=True)
+def _blend(a, f, su, sp, a0, da, q_t, q_p, tube_t, tube_p, u_t, u_p, p_t, p_p, temp, pres):
+    """T and P per (height, column): area-weighted means of the components (see the module docstring)."""
+    na, nz = q_t.shape
+    ny, nx = a.shape
+    for j in nb.prange(ny):
+        m = np.empty(nx, dtype=np.int64)
+        w = np.empty(nx)
+        q = np.empty(nx)
+        for i in range(nx):
+            x = min(max((a[j, i] - a0) / da, 0.0), na - 1.000001)
+            m[i] = int(x)
+            w[i] = x - m[i]
+            q[i] = max(1.0 - f[j, i] - su[j, i] - sp[j, i], 0.0)
+        for k in range(nz):
+            for i in range(nx):
+                mi, wi = m[i], w[i]
+                tq = (1 - wi) * q_t[mi, k] + wi * q_t[mi + 1, k]
+                pq = (1 - wi) * q_p[mi, k] + wi * q_p[mi + 1, k]
+                temp[k, j, i] = q[i] * tq + f[j, i] * tube_t[k] + su[j, i] * u_t[k] + sp[j, i] * p_t[k]
+                pres[k, j, i] = q[i] * pq + f[j, i] * tube_p[k] + su[j, i] * u_p[k] + sp[j, i] * p_p[k]
+
+
+@nb.njit(parallel=True, cache=True)
+def _flow(h, s, fl, vz0, gx, gy, svx, svy, vel):
+    """v_z = h V, v_h = s ∇φ + (Evershed, moat) × their height profile."""
+    nz = h.size
+    ny, nx = vz0.shape
+    for j in nb.prange(ny):
+        for k in range(nz):
+            for i in range(nx):
+                vel[0, k, j, i] = s[k] * gx[j, i] + fl[k] * svx[j, i]
+                vel[1, k, j, i] = s[k] * gy[j, i] + fl[k] * svy[j, i]
+                vel[2, k, j, i] = h[k] * vz0[j, i]
+
+
+@nb.njit(parallel=True, cache=True)
+def _add_internetwork(c, dc, ax, ay, dazdx, dazdy, curl, mag):
+    """B += curl of A c(z) (see `~gongsynth.sun.model_atmosphere.flux_elements`)."""
+    nz = c.size
+    ny, nx = ax.shape
+    for j in nb.prange(ny):
+        for k in range(nz):
+            for i in range(nx):
+                mag[0, k, j, i] += c[k] * dazdy[j, i] - dc[k] * ay[j, i]
+                mag[1, k, j, i] += dc[k] * ax[j, i] - c[k] * dazdx[j, i]
+                mag[2, k, j, i] += c[k] * curl[j, i]
+
+
+def _scalar(q, unit, name, positive=True):
+    check_quantity(q, unit, name)
+    if np.ndim(q) != 0 or not np.isfinite(q.value) or (q.value <= 0 if positive else q.value < 0):
+        raise ValueError(f"{name} must be a {'positive' if positive else 'non-negative'} finite scalar, got {q}")
+    return float(q.to_value(unit))
+
+
+def _choice(value, options, name):
+    if value not in options:
+        raise ValueError(f"{name} must be one of {sorted(options)}, got {value!r}")
+    return value
+
+
+def _fraction(value, name, lo=0.0, hi=1.0):
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not lo <= value <= hi:
+        raise ValueError(f"{name} must be a number in [{lo}, {hi}], got {value!r}")
+    return float(value)
+
+
+def model_atmosphere(shape=(256, 256), pixel_size=96 * u.km, *, seed, nz=80,
+                     height_range=(-600, 700) * u.km, spot="auto", granule_size=1.3 * u.Mm,
+                     granulation_models="brc", granulation_amplitude=1.0,
+                     granulation_velocity=2.0 * u.km / u.s, velocity_decay_height=250 * u.km,
+                     element_flux_density=20 * u.G, element_field=1500 * u.G, element_model="network",
+                     positive_fraction=0.6, internetwork_field=10 * u.G,
+                     internetwork_horizontal_field=50 * u.G, umbra_radius=7 * u.Mm,
+                     penumbra_radius=16 * u.Mm, umbra_field=3000 * u.G, penumbra_field=1500 * u.G,
+                     umbra_model="maltby-m", evershed_speed=2.0 * u.km / u.s, moat_speed=0.8 * u.km / u.s,
+                     microturbulence=0.6 * u.km / u.s):
+    """
+    A seeded, horizontally periodic 3-D model photosphere for LTE Stokes synthesis.
+
+    The module docstring of `gongsynth.sun.model_atmosphere.builder` gives the
+    construction and the sources.  Same arguments and seed → the same bits.
+
+    Parameters
+    ----------
+    shape : tuple of int, optional
+        (ny, nx) columns (default 256 × 256).
+    pixel_size : `~astropy.units.Quantity`, optional
+        Horizontal spacing (default 96 km).
+    seed : int, `numpy.random.SeedSequence` or `numpy.random.Generator`
+        Randomness (required).
+    nz : int, optional
+        Number of heights (default 80).
+    height_range : `~astropy.units.Quantity`, optional
+        Bottom and top heights, relative to the quiet Sun's mean τ₅₀₀ = 1
+        (default −600 to 700 km: the umbra's Wilson depression needs depth).
+    spot : bool or "auto", optional
+        A sunspot at the box centre; "auto" (default): when it fits
+        (box ≥ 2.2 × ``penumbra_radius``).
+    granule_size : `~astropy.units.Quantity`, optional
+        Mean spacing of granule centres (1.3 Mm).
+    granulation_models : {"brc", "bbr"}, optional
+        The two-component quiet-Sun model pair giving the granular ΔT(log τ).
+    granulation_amplitude : float, optional
+        Scale of that ΔT (default 1: the models as published).
+    granulation_velocity : `~astropy.units.Quantity`, optional
+        RMS vertical velocity at τ = 1 in the quiet Sun (2 km/s).
+    velocity_decay_height : `~astropy.units.Quantity`, optional
+        e-folding height of the granular velocities above τ = 1 (200 km).
+    element_flux_density : `~astropy.units.Quantity`, optional
+        Mean unsigned flux density of the kG elements over the box (20 G).
+    element_field : `~astropy.units.Quantity`, optional
+        Field strength of an element at its own τ = 1 (1500 G).
+    element_model : {"network", "plage"}, optional
+        Temperature stratification of the elements (Solanki's models).
+    positive_fraction : float, optional
+        Fraction of the element flux of positive polarity (0.6).
+    internetwork_field, internetwork_horizontal_field : `~astropy.units.Quantity`, optional
+        RMS vertical (10 G) and horizontal (50 G) internetwork field at τ = 1.
+    umbra_radius, penumbra_radius : `~astropy.units.Quantity`, optional
+        7 and 16 Mm.
+    umbra_field, penumbra_field : `~astropy.units.Quantity`, optional
+        Field at the umbral centre (3000 G) and mean penumbral field (1500 G).
+    umbra_model : {"maltby-m", "maltby-e"}, optional
+        Umbral temperature stratification.
+    evershed_speed, moat_speed : `~astropy.units.Quantity`, optional
+        Peak Evershed (2 km/s) and moat (0.8 km/s) outflows.
+    microturbulence : `~astropy.units.Quantity`, optional
+        Added unresolved velocity (default 0: the 3-D flow broadens the line).
+
+    Returns
+    -------
+    `~gongsynth.Atmosphere`
+        Temperature, gas pressure, velocity, magnetic field (float32); ``meta``
+        holds the parameters, the Wilson depressions and the corrugation.
+
+    Raises
+    ------
+    ValueError
+        For arguments out of range (the message names the argument).
+
+    Examples
+    --------
+    >>> import astropy.units as u
+    >>> atm = model_atmosphere((32, 32), seed=1, nz=40)
+    >>> atm.shape, bool(atm.meta["spot"])
+    ((40, 32, 32), False)
+    """
+    if (not isinstance(shape, (tuple, list)) or len(shape) != 2
+            or not all(isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 8 for n in shape)):
+        raise ValueError(f"shape must be two ints >= 8 (ny, nx), got {shape!r}")
+    ny, nx = (int(n) for n in shape)
+    if isinstance(nz, bool) or not isinstance(nz, (int, np.integer)) or nz < 16:
+        raise ValueError(f"nz must be an int >= 16, got {nz!r}")
+    px = _scalar(pixel_size, u.km, "pixel_size")
+    check_quantity(height_range, u.km, "height_range")
+    if np.shape(height_range) != (2,):
+        raise ValueError(f"height_range must be (bottom, top), got {height_range}")
+    z_lo, z_hi = (float(v) for v in height_range.to_value(u.km))
+    if not (z_lo <= -200 and z_hi >= 400):
+        raise ValueError(f"height_range must reach at least 200 km below and 400 km above tau = 1, got "
+                         f"{height_range}")
+    if spot not in (True, False, "auto"):
+        raise ValueError(f"spot must be True, False or 'auto', got {spot!r}")
+    gran = _scalar(granule_size, u.km, "granule_size")
+    _choice(granulation_models, GRANULATION_MODELS, "granulation_models")
+    amp = _fraction(granulation_amplitude, "granulation_amplitude", 0.0, 3.0)
+    v_g = _scalar(granulation_velocity, u.km / u.s, "granulation_velocity", positive=False)
+    h_v = _scalar(velocity_decay_height, u.km, "velocity_decay_height")
+    flux = _scalar(element_flux_density, u.G, "element_flux_density", positive=False)
+    b_el = _scalar(element_field, u.G, "element_field")
+    _choice(element_model, ELEMENT_MODELS, "element_model")
+    pos = _fraction(positive_fraction, "positive_fraction")
+    in_v = _scalar(internetwork_field, u.G, "internetwork_field", positive=False)
+    in_h = _scalar(internetwork_horizontal_field, u.G, "internetwork_horizontal_field", positive=False)
+    r_u = _scalar(umbra_radius, u.km, "umbra_radius")
+    r_p = _scalar(penumbra_radius, u.km, "penumbra_radius")
+    b_u = _scalar(umbra_field, u.G, "umbra_field")
+    b_p = _scalar(penumbra_field, u.G, "penumbra_field")
+    _choice(umbra_model, UMBRA_MODELS, "umbra_model")
+    v_e = _scalar(evershed_speed, u.km / u.s, "evershed_speed", positive=False)
+    v_m = _scalar(moat_speed, u.km / u.s, "moat_speed", positive=False)
+    v_t = _scalar(microturbulence, u.km / u.s, "microturbulence", positive=False)
+    for name, value in (("element_field", b_el), ("umbra_field", b_u), ("penumbra_field", b_p)):
+        if value > 6000:
+            raise ValueError(f"{name} must be <= 6000 G, got {value} G")
+    if r_u >= r_p:
+        raise ValueError(f"umbra_radius ({umbra_radius}) must be smaller than penumbra_radius ({penumbra_radius})")
+    fits = 2.2 * r_p <= min(ny, nx) * px
+    if spot is True and not fits:
+        raise ValueError(f"spot=True: the spot (penumbra_radius {penumbra_radius}) does not fit in the "
+                         f"{nx * px / 1e3:.1f} x {ny * px / 1e3:.1f} Mm box (needs 2.2 x penumbra_radius)")
+    has_spot = bool(spot is True or (spot == "auto" and fits))
+
+    zg = np.linspace(z_lo, z_hi, int(nz))
+    ref = reference_stratifications(tuple(zg), granulation_models, amp, element_model, b_el, umbra_model,
+                                    b_u, b_p)
+    root = as_seed_sequence(seed)
+    grid = PeriodicGrid(ny, nx, px)
+    a, vpat, lanes = granulation_pattern(grid, stage_generator(root, "model_atmosphere", _GRANULES), gran)
+
+    zeros = np.zeros((ny, nx))
+    if has_spot:
+        sp = spot_structure(grid, stage_generator(root, "model_atmosphere", _SPOT), r_umbra=r_u, r_penumbra=r_p,
+                            b_umbra=b_u, b_penumbra=b_p, v_evershed=v_e, v_moat=v_m)
+        keep_out = 0.5 * (1 + np.tanh((sp["r"] - r_p - 1500.0) / 500.0))
+    else:
+        sp = dict(umbra=zeros, penumbra=zeros, bz=zeros, vx=zeros, vy=zeros, evershed=zeros, moat=zeros,
+                  cos=zeros, sin=zeros, mask=zeros)
+        keep_out = np.ones((ny, nx))
+
+    # kG elements in the lanes, clustered on ~5 Mm scales like the network.
+    rng = stage_generator(root, "model_atmosphere", _ELEMENTS)
+    fluxes = fe.power_law_fluxes(rng, flux * grid.Lx * grid.Ly * 1e10)
+    signs = np.where(rng.uniform(size=fluxes.size) < pos, 1.0, -1.0)
+    cluster = np.maximum(grid.noise(rng, 2500.0), 0.0) + 0.2
+    bz_el = fe.render_elements(grid, rng, lanes * cluster * keep_out + 1e-12, fluxes, signs, b_el)
+    spot_w = sp["umbra"] + sp["penumbra"]
+    f_el = np.clip(np.abs(bz_el) / b_el, 0.0, 1.0) * (1 - spot_w)
+
+    # Thermodynamics.
+    temp = np.empty((zg.size, ny, nx), dtype=np.float32)
+    pres = np.empty_like(temp)
+    a_clip = np.clip(a, _A_TABLE[0], _A_TABLE[-1])
+    _blend(a_clip, f_el, sp["umbra"], sp["penumbra"], float(_A_TABLE[0]), float(_A_TABLE[1] - _A_TABLE[0]),
+           ref["quiet_t"], np.exp(ref["quiet_lnp"]), ref["tube_t"], np.exp(ref["tube_lnp"]), ref["umbra_t"],
+           np.exp(ref["umbra_lnp"]), ref["penumbra_t"], np.exp(ref["penumbra_lnp"]), temp, pres)
+
+    # Velocity: anelastic granular flow outside the magnetic structures, Evershed and moat flows.
+    h, s = anelastic_profile(zg, ref["density"], h_v)
+    quiet = (1 - f_el) * (1 - sp["mask"])
+    vz0 = vpat * quiet
+    vz0 -= vz0.mean()
+    vz0 *= v_g / (np.sqrt(np.sum(vz0 ** 2) / max(quiet.sum(), 1.0)) or 1.0)
+    gx, gy = grid.gradient(grid.inverse_laplacian(vz0))
+    vel = np.empty((3,) + temp.shape, dtype=np.float32)
+    flows = np.exp(-np.maximum(zg, 0.0) / 150.0)          # Evershed/moat flows: strongest at tau = 1
+    _flow(h, s, flows, vz0, gx, gy, sp["vx"], sp["vy"], vel)
+
+    # Magnetic field: potential continuation of the element and spot base planes + internetwork.
+    rng = stage_generator(root, "model_atmosphere", _INTERNETWORK)
+    pots = fe.internetwork_potentials(grid, rng, in_v, in_h)
+    quiet_in = (1 - sp["mask"])
+    ax, ay, az = (p_ * quiet_in for p_ in pots)
+    dazdx, dazdy = grid.gradient(az)
+    curl = grid.gradient(ay)[0] - grid.gradient(ax)[1]
+    pot = (ax, ay, dazdx, dazdy, curl)
+    spectra, bases = [grid.fft(bz_el).astype(np.complex64)], [ref["z_tube"]]
+    if has_spot:
+        spectra.append(grid.fft(sp["bz"]).astype(np.complex64))
+        bases.append(ref["z_umbra"])
+    mag = np.empty_like(vel)
+    for k in range(zg.size):
+        mag[0, k], mag[1, k], mag[2, k] = fe.potential_layer(grid, spectra, bases, zg[k])
+    c, dc = fe.internetwork_profile(zg)
+    _add_internetwork(c, dc, *pot, mag)
+
+    meta = {
+        "origin": "gongsynth.model_atmosphere", "seed_entropy": str(root.entropy), "spot": has_spot,
+        "wilson_depression_km": {"element": -ref["z_tube"], "umbra": -ref["z_umbra"],
+                                 "penumbra": -ref["z_penumbra"]},
+        "granule_corrugation_km": float(np.interp(1.0, _A_TABLE, ref["z_tau1_quiet"])
+                                        - np.interp(-1.0, _A_TABLE, ref["z_tau1_quiet"])),
+        "params": {"shape": [ny, nx], "pixel_size_km": px, "nz": int(nz), "height_range_km": [z_lo, z_hi],
+                   "spot": spot, "granule_size_km": gran, "granulation_models": granulation_models,
+                   "granulation_amplitude": amp, "granulation_velocity_km_s": v_g,
+                   "velocity_decay_height_km": h_v, "element_flux_density_G": flux, "element_field_G": b_el,
+                   "element_model": element_model, "positive_fraction": pos, "internetwork_field_G": in_v,
+                   "internetwork_horizontal_field_G": in_h, "umbra_radius_km": r_u, "penumbra_radius_km": r_p,
+                   "umbra_field_G": b_u, "penumbra_field_G": b_p, "umbra_model": umbra_model,
+                   "evershed_speed_km_s": v_e, "moat_speed_km_s": v_m, "microturbulence_km_s": v_t},
+    }
+    kms = u.km / u.s
+    return Atmosphere(temp << u.K, zg * u.km, px * u.km, gas_pressure=pres << u.Unit("dyn cm-2"),
+                      velocity=vel << kms, magnetic_field=mag << u.G, microturbulence=v_t * kms, meta=meta)

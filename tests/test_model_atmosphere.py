@@ -1,0 +1,222 @@
+"""
+The built-in 3-D model Sun (`gongsynth.sun.model_atmosphere`): construction, physics and statistics.
+
+Statistics are compared with a genuine MURaM snapshot and a Stein & Nordlund
+granulation slice (``../shared/data``; those tests skip without it), through
+the same optical-depth computation and, for spectra, gongsynth's own RT.
+Boxes are small (32²-64²) and seeded.
+"""
+from pathlib import Path
+
+import astropy.units as u
+import numpy as np
+import pytest
+
+import gongsynth
+from gongsynth.sun.model_atmosphere import model_atmosphere
+from gongsynth.sun.model_atmosphere import stratification as st
+from gongsynth.sun.model_atmosphere.builder import reference_stratifications
+from gongsynth.sun.model_atmosphere.granulation import PeriodicGrid
+from gongsynth.sun.rt.eos import AMU, MEAN_MASS_PER_H, solve_state
+from gongsynth.sun.rt.hydrostatic import SOLAR_GRAVITY, hydrostatic_tau_scale
+from gongsynth.sun.rt.opacity import continuum_opacity
+
+DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+MURAM = DATA / "mhd" / "muram-test3d-it000000"
+NS = DATA / "real" / "models" / "ns_y27_63x64.atmos"
+needs_muram = pytest.mark.skipif(not (MURAM / "Header.000000").is_file(), reason="needs ../shared/data")
+needs_ns = pytest.mark.skipif(not NS.is_file(), reason="needs ../shared/data")
+
+QUIET = dict(spot=False, element_flux_density=0 * u.G)
+
+
+def log_tau(temp, z_km, *, pressure=None, density=None, ne=None):
+    """log10 τ₅₀₀ (nz, ...) integrated from the top, z increasing along axis 0."""
+    s = solve_state(temp, gas_pressure=pressure, density=density, electron_density_=ne)
+    k = continuum_opacity(500.0, temp, s["electron_density"], s["hydrogen_density"])
+    dz = np.diff(z_km * 1e5).reshape((-1,) + (1,) * (temp.ndim - 1))
+    seg = 0.5 * (k[1:] + k[:-1]) * dz
+    tau = np.concatenate([np.cumsum(seg[::-1], axis=0)[::-1], np.zeros((1,) + temp.shape[1:])])
+    return np.log10(np.maximum(tau, 1e-30)), s
+
+
+def at_log_tau(field, lt, level):
+    """``field`` interpolated per column to log τ = level (lt decreasing along axis 0)."""
+    i1 = np.clip((lt > level).sum(0), 1, lt.shape[0] - 1)[None]
+    i0 = i1 - 1
+    l0, l1 = np.take_along_axis(lt, i0, 0)[0], np.take_along_axis(lt, i1, 0)[0]
+    w = (level - l0) / (l1 - l0)
+    return (1 - w) * np.take_along_axis(field, i0, 0)[0] + w * np.take_along_axis(field, i1, 0)[0]
+
+
+def model_stats(atm):
+    temp = atm.raw("temperature").astype(float)
+    lt, _ = log_tau(temp, atm.z.to_value(u.km), pressure=atm.raw("gas_pressure").astype(float))
+    return lt, temp, atm.raw("velocity")[2].astype(float)
+
+
+def muram_stats():
+    atm = gongsynth.Atmosphere.from_muram(MURAM)
+    temp = atm.raw("temperature").astype(float)
+    lt, _ = log_tau(temp, atm.z.to_value(u.km), density=atm.raw("density").astype(float),
+                    ne=atm.raw("electron_density").astype(float))
+    return lt, temp, atm.raw("velocity")[2].astype(float)
+
+
+def ns_stats():
+    raw = NS.read_bytes()
+    a = np.frombuffer(raw[24:], ">f8")
+    z = a[63:127][::-1].copy()
+    temp, ne, _, _, vz, nh = (f[::-1] for f in a[127:].reshape(6, 64, 63))
+    lt, _ = log_tau(temp, z, density=nh * 1e-6 * AMU * MEAN_MASS_PER_H, ne=ne * 1e-6)
+    return lt, temp, vz
+
+
+@pytest.fixture(scope="module")
+def quiet_box():
+    return model_atmosphere((48, 48), seed=11, nz=66, **QUIET)
+
+
+# --- construction --------------------------------------------------------------------------------
+def test_reproducible_and_seeded():
+    a = model_atmosphere((32, 32), seed=5, nz=40)
+    b = model_atmosphere((32, 32), seed=5, nz=40)
+    c = model_atmosphere((32, 32), seed=6, nz=40)
+    for name in ("temperature", "gas_pressure", "velocity", "magnetic_field"):
+        assert np.array_equal(a.raw(name), b.raw(name)), name
+        assert not np.array_equal(a.raw(name), c.raw(name)), name
+        assert a.raw(name).dtype == np.float32
+    assert a.shape == (40, 32, 32) and a.meta["seed_entropy"] == "5"
+
+
+def test_periodic(quiet_box):
+    """No seam: differences across the wrap are like differences between interior neighbours."""
+    k = int(np.argmin(np.abs(quiet_box.z.value)))
+    for name, f in (("T", quiet_box.raw("temperature")[k]), ("vz", quiet_box.raw("velocity")[2, k]),
+                    ("Bx", quiet_box.raw("magnetic_field")[0, k])):
+        inner = np.sqrt(np.mean(np.diff(f, axis=1) ** 2))
+        seam = np.sqrt(np.mean((f[:, 0] - f[:, -1]) ** 2))
+        assert seam < 2.0 * inner, name
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(shape=(4, 32)), "shape"),
+    (dict(pixel_size=96), "pixel_size"),
+    (dict(pixel_size=-1 * u.km), "pixel_size"),
+    (dict(nz=5), "nz"),
+    (dict(height_range=(0, 700) * u.km), "height_range"),
+    (dict(spot="yes"), "spot"),
+    (dict(spot=True), "spot=True"),
+    (dict(granulation_models="xyz"), "granulation_models"),
+    (dict(granulation_amplitude=-1), "granulation_amplitude"),
+    (dict(element_field=1500 * u.km), "element_field"),
+    (dict(element_field=9000 * u.G), "element_field"),
+    (dict(umbra_radius=20 * u.Mm), "umbra_radius"),
+    (dict(positive_fraction=1.5), "positive_fraction"),
+    (dict(umbra_model="z"), "umbra_model"),
+    (dict(microturbulence=-1 * u.km / u.s), "microturbulence"),
+])
+def test_bad_input_names_the_argument(kwargs, match):
+    args = dict(shape=(16, 16), seed=0)
+    args.update(kwargs)
+    with pytest.raises((ValueError, TypeError, u.UnitsError), match=match):
+        model_atmosphere(**args)
+
+
+def test_seed_is_required():
+    with pytest.raises(TypeError, match="seed"):
+        model_atmosphere((16, 16))
+
+
+# --- 1-D stratifications -------------------------------------------------------------------------
+def test_tau_scale_solver_matches_gongsynth_hydrostatics():
+    t = st.model_temperature("hsra")
+    z, p, _ = st.tau_scale_family(t[None])
+    z2, p2, _ = hydrostatic_tau_scale(st.LOG_TAU, t)
+    assert np.max(np.abs(p[0] / p2 - 1)) < 1e-3
+    assert np.max(np.abs(z[0] - z2)) < 1.0
+
+
+@needs_muram
+def test_subsurface_extension_against_muram():
+    """Below its table the extended HSRA follows MURaM's mean T (15 %) and pressure rise (10 %) 300-500 km down."""
+    zg = np.linspace(-600, 700, 66)
+    ref = reference_stratifications(tuple(zg))
+    lt, temp, _ = muram_stats()
+    atm = gongsynth.Atmosphere.from_muram(MURAM)
+    z1 = at_log_tau(np.broadcast_to(atm.z.value[:, None, None], temp.shape), lt, 0.0).mean()
+    pm = np.log(atm.raw("gas_pressure").astype(float).mean(axis=(1, 2)))
+    p0_muram = np.interp(z1, atm.z.value, pm)
+    p0_ref = np.interp(0.0, zg, ref["mean_lnp"])
+    for depth in (-300.0, -500.0):
+        k = int(np.argmin(np.abs(atm.z.value - z1 - depth)))
+        t_ref = np.interp(depth, zg, ref["mean_t"])
+        rise_ref = np.interp(atm.z.value[k] - z1, zg, ref["mean_lnp"]) - p0_ref
+        assert abs(t_ref / temp[k].mean() - 1) < 0.15, depth
+        assert rise_ref == pytest.approx(pm[k] - p0_muram, rel=0.10), depth
+
+
+def test_pressure_balance_places_the_magnetic_models():
+    """P_int(τ=1) + B²/8π = P_ext at the depressed height, for the element and the umbra."""
+    zg = np.linspace(-600, 700, 131)
+    ref = reference_stratifications(tuple(zg), element_field=1500.0, umbra_field=3000.0)
+    for key, field in (("tube", 1500.0), ("umbra", 3000.0)):
+        depth = ref[f"z_{key}"]
+        p_int = np.exp(np.interp(depth, zg, ref[f"{key}_lnp"]))
+        p_ext = np.exp(np.interp(depth, zg, ref["mean_lnp"]))
+        assert p_int + field ** 2 / (8 * np.pi) == pytest.approx(p_ext, rel=0.02), key
+    assert 0 < -ref["z_tube"] < -ref["z_umbra"]
+
+
+# --- 3-D consistency -----------------------------------------------------------------------------
+def test_hydrostatic_consistency(quiet_box):
+    """dP/dz = −ρg in the quiet box to a few per cent (each component is hydrostatic; blends nearly)."""
+    z = quiet_box.z.to_value(u.cm)
+    p = quiet_box.raw("gas_pressure").astype(float)
+    rho = solve_state(quiet_box.raw("temperature").astype(float), gas_pressure=p)["density"]
+    dpdz = np.diff(p, axis=0) / np.diff(z)[:, None, None]
+    rho_mid = 0.5 * (rho[1:] + rho[:-1])
+    zmid = 0.5 * (z[1:] + z[:-1]) * 1e-5
+    sel = (zmid > -400) & (zmid < 600)
+    ratio = -dpdz[sel] / (rho_mid[sel] * SOLAR_GRAVITY)
+    assert np.median(np.abs(ratio - 1)) < 0.02
+    assert np.percentile(np.abs(ratio - 1), 95) < 0.08
+
+
+def test_anelastic_flow_divergence(quiet_box):
+    """∇·(ρ̄ v) = 0: the horizontal divergence cancels ∂z(ρ̄ v_z) to < 2 % of its size."""
+    ref = reference_stratifications(tuple(quiet_box.z.value))
+    rho = ref["density"]
+    v = quiet_box.raw("velocity").astype(float)
+    grid = PeriodicGrid(48, 48, 96.0)
+    z = quiet_box.z.value
+    vert = np.gradient(rho[:, None, None] * v[2], z, axis=0)
+    horiz = np.stack([rho[k] * (grid.gradient(v[0, k])[0] + grid.gradient(v[1, k])[1]) for k in range(z.size)])
+    sel = (z > -400) & (z < 600)
+    assert np.sqrt(np.mean((vert + horiz)[sel] ** 2)) < 0.02 * np.sqrt(np.mean(vert[sel] ** 2))
+    # Outflows from the granules: horizontal divergence positive where v_z > 0 at tau = 1.
+    k = int(np.argmin(np.abs(z)))
+    assert np.corrcoef(horiz[k].ravel(), v[2, k].ravel())[0, 1] > 0.9
+
+
+def test_magnetic_field_is_divergence_free():
+    atm = model_atmosphere((48, 48), seed=4, nz=66, spot=False, element_flux_density=60 * u.G)
+    b = atm.raw("magnetic_field").astype(float)
+    z = atm.z.value
+    grid = PeriodicGrid(48, 48, 96.0)
+    base = -atm.meta["wilson_depression_km"]["element"]
+    sel = np.flatnonzero(z > base + 40)[1:-1]
+    div = np.stack([grid.gradient(b[0, k])[0] + grid.gradient(b[1, k])[1]
+                    + (b[2, k + 1] - b[2, k - 1]) / (z[k + 1] - z[k - 1]) for k in sel])
+    scale = np.stack([np.abs(b[2, k + 1] - b[2, k - 1]) / (z[k + 1] - z[k - 1]) for k in sel])
+    assert np.sqrt(np.mean(div ** 2)) < 0.05 * np.sqrt(np.mean(scale ** 2))
+
+
+def test_internetwork_weak_mixed_mostly_horizontal(quiet_box):
+    k = int(np.argmin(np.abs(quiet_box.z.value)))
+    b = quiet_box.raw("magnetic_field")[:, k].astype(float)
+    bh = np.sqrt(np.mean(b[0] ** 2 + b[1] ** 2))
+    bz = np.sqrt(np.mean(b[2] ** 2))
+    assert 10 < bh < 100 and 3 < bz < 40
+    assert bh > 3 * bz
+    assert abs(b[2].mean()) < 0.2 * bz
