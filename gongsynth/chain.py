@@ -33,6 +33,7 @@ import astropy.units as u
 import numpy as np
 from sunpy import log
 
+from gongsynth.config import SUNS
 from gongsynth.geometry import Pointing, disk_geometry
 from gongsynth.products.maps import PRODUCTS, make_product_map
 from gongsynth.seeding import child_sequence
@@ -43,7 +44,7 @@ from gongsynth.stages.reduction import reduce
 from gongsynth.stages.scene.fulldisk import full_disk_scene
 from gongsynth.stages.scene.tiled import tiled_scenes
 from gongsynth.sun.atmosphere import Atmosphere
-from gongsynth.sun.photosphere import DeferredStokes, model_photosphere
+from gongsynth.sun.photosphere import DeferredStokes
 from gongsynth.sun.rt.synthesis import synthesize as rt_synthesize
 from gongsynth.sun.sampling import check_spectral_sampling
 
@@ -220,12 +221,12 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False):
 
     if stokes is None:
         def photosphere():
-            return {"photosphere": model_photosphere(
-                shape=config.photosphere_shape, pixel_size=config.photosphere_pixel_size,
-                seed=child_sequence(config.seed, "photosphere"), **config.photosphere)}
+            return {"photosphere": SUNS[config.sun](seed=child_sequence(config.seed, "photosphere"),
+                                                    **config.sun_arguments())}
 
+        what = "3-D model atmosphere" if config.sun == "model-atmosphere" else "model photosphere"
         stages.append(Stage("photosphere", (), ("photosphere",), photosphere,
-                            "the built-in model photosphere (seeded)"))
+                            f"the built-in {what} (seeded)"))
     elif config.mode == "full-disk":
         raise ValueError("mode='full-disk' synthesises the built-in photosphere at every point's own "
                          "viewing angle; it does not take a Stokes cube or an atmosphere")
@@ -239,7 +240,14 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False):
         stages.append(Stage("scene", ("photosphere",), ("light", "truth_scene"), disk_scene,
                             "synthesis at every point's own mu, mapped over the disk"))
     else:
-        if stokes is None:
+        if stokes is None and config.sun == "model-atmosphere":
+            def atmosphere_transfer(photosphere):
+                return {"stokes": rt_synthesize(photosphere, mu=pointing.mu, azimuth=pointing.los_azimuth,
+                                                progress=progress)}
+
+            stages.append(Stage("synthesis", ("photosphere",), ("stokes",), atmosphere_transfer,
+                                "LTE Stokes radiative transfer of the model atmosphere at the pointing's mu"))
+        elif stokes is None:
             def synthesis(photosphere):
                 # Deferred: the channels stage synthesises it block by block, never whole.
                 return {"stokes": DeferredStokes(photosphere, mu=pointing.mu,

@@ -25,7 +25,7 @@ from pathlib import Path
 import astropy.units as u
 from sunpy import log
 
-from gongsynth.config import ENGINES, MODES, Effects
+from gongsynth.config import ENGINES, MODES, SUNS, Effects
 from gongsynth.resources import CannotRunHereError
 from gongsynth.version import version as __version__
 
@@ -89,6 +89,9 @@ def build_parser():
                      help="detector side in pixels (default 860)")
     sim.add_argument("--workers", type=_number(int, minimum=1), metavar="N",
                      help="parallel workers: threads for one run, Dask workers for a sweep")
+    sim.add_argument("--sun", choices=tuple(SUNS),
+                     help="the built-in Sun: Milne-Eddington columns (fast, the default) or the 3-D "
+                          "model atmosphere through LTE radiative transfer")
     sim.add_argument("--atmosphere", type=Path, metavar="PATH",
                      help="a model atmosphere as the input Sun, synthesised by LTE radiative transfer: "
                           "a MURaM snapshot folder, a gongsynth or ART HDF5 file (.h5), or a 1-D model "
@@ -129,7 +132,7 @@ def _simulation_config(args):
     changes = {}
     if args.duration is not None:
         changes["duration"] = args.duration * u.min
-    for name in ("engine", "mode", "seed", "workers", "obstime"):
+    for name in ("engine", "mode", "seed", "workers", "obstime", "sun"):
         if getattr(args, name) is not None:
             changes[name] = getattr(args, name)
     off = {e.name: False for e in dataclasses.fields(Effects) if getattr(args, f"no_{e.name}")}

@@ -4,7 +4,7 @@ Run configuration: everything needed to repeat a simulation bit for bit.
 A `SimulationConfig` maps one-to-one onto the keyword arguments of
 `gongsynth.simulate` (the ``[simulation]`` table of a TOML file), plus the
 `Effects` that can be switched off (``[effects]``), the knobs of the built-in
-model photosphere (``[photosphere]``) and a `~gongsynth.GONGInstrument`
+Sun chosen by ``sun`` (``[photosphere]``) and a `~gongsynth.GONGInstrument`
 (``[instrument]``).  Unknown keys and quantities in the wrong units are errors
 that name the key.
 """
@@ -27,11 +27,12 @@ from gongsynth.instrument import GONGInstrument
 from gongsynth.seeding import root_seed
 from gongsynth.stages.camera.integrate import ENGINES
 from gongsynth.stages.camera.schedule import n_frames_in
+from gongsynth.sun.model_atmosphere import model_atmosphere
 from gongsynth.sun.photosphere import model_photosphere
 from gongsynth.tomlfmt import toml_table
 
-__all__ = ["SimulationConfig", "Effects", "ENGINES", "MODES", "DEFAULT_OBSTIME", "IN_MEMORY",
-           "fingerprint"]
+__all__ = ["SimulationConfig", "Effects", "ENGINES", "MODES", "SUNS", "DEFAULT_OBSTIME", "IN_MEMORY",
+           "fingerprint", "photosphere_defaults"]
 
 #: Scene modes accepted by `SimulationConfig.mode`.
 MODES = ("tiled", "full-disk")
@@ -40,13 +41,18 @@ DEFAULT_OBSTIME = _DEFAULT_TIME.isot
 #: The recorded "path" of a flat or dark that was passed as an array.
 IN_MEMORY = "<array>"
 
-#: Knobs of `~gongsynth.sun.photosphere.model_photosphere` set by [simulation] instead of [photosphere].
+#: The built-in Suns (`SimulationConfig.sun`) and the function that builds each: the
+#: Milne-Eddington column photosphere (fast; a toy for calibration: one line strength
+#: everywhere) and the 3-D model atmosphere synthesised by LTE radiative transfer.
+SUNS = {"milne-eddington": model_photosphere, "model-atmosphere": model_atmosphere}
+
+#: Arguments of the built-in Suns set by [simulation] instead of [photosphere].
 _PHOTOSPHERE_RUN_KEYS = ("shape", "pixel_size", "seed")
 
 _QUANTITIES = {
     "latitude": (u.deg, "heliographic latitude of the field centre on the central meridian"),
     "duration": (u.min, "length of the observation (GONG magnetograms: 1 min; the paper: 10 min)"),
-    "photosphere_pixel_size": (u.km, "pixel size of the built-in model photosphere"),
+    "photosphere_pixel_size": (u.km, "column spacing of the built-in Sun"),
 }
 _DOCS = {
     "engine": "camera engine: 'blocks' (fast, statistically exact) or 'frames' (frame by frame)",
@@ -55,7 +61,8 @@ _DOCS = {
     "detector_shape": "detector side in pixels (GONG: 860; smaller for quick runs)",
     "resolutions": "tiled mode: magnification of the tile in each quadrant (1 = GONG resolution)",
     "obstime": "observation time (ISO); sets the observer position and the map dates",
-    "photosphere_shape": "pixels of the built-in model photosphere (ny, nx)",
+    "photosphere_shape": "columns of the built-in Sun (ny, nx); unset: that Sun's default",
+    "sun": "the built-in Sun: 'milne-eddington' (columns, fast) or 'model-atmosphere' (3-D, LTE transfer)",
     "workers": "threads for the frames engine (None: all cores)",
     "flat_file": "a user-supplied flat: its FITS path, or '<array>' (unset: the synthetic flat)",
     "flat_sha256": "SHA-256 of that flat, checked when the run is repeated",
@@ -139,13 +146,17 @@ class Effects:
         return cls(**table)
 
 
-def photosphere_defaults():
+def photosphere_defaults(sun="milne-eddington"):
     """
-    The knobs of `~gongsynth.sun.photosphere.model_photosphere` that ``[photosphere]`` sets,
-    with their defaults.
+    The knobs of a built-in Sun that ``[photosphere]`` sets, with their defaults.
 
     Shape, pixel size and seed are run arguments (``photosphere_shape``,
     ``photosphere_pixel_size``, ``seed``) and are not among them.
+
+    Parameters
+    ----------
+    sun : str
+        A key of `SUNS`.
 
     Returns
     -------
@@ -155,18 +166,39 @@ def photosphere_defaults():
     --------
     >>> photosphere_defaults()["umbra_field"]
     <Quantity 3000. G>
+    >>> photosphere_defaults("model-atmosphere")["element_field"]
+    <Quantity 1500. G>
     """
-    return {name: p.default for name, p in inspect.signature(model_photosphere).parameters.items()
+    if sun not in SUNS:
+        raise ValueError(f"sun must be one of {tuple(SUNS)}, got {sun!r}")
+    return {name: p.default for name, p in inspect.signature(SUNS[sun]).parameters.items()
             if name not in _PHOTOSPHERE_RUN_KEYS}
 
 
-def _photosphere_knobs(values, where="photosphere"):
-    """Defaults completed by ``values``, each checked against its default's type and unit."""
-    defaults = photosphere_defaults()
+def _sun_default(sun, name):
+    """The default ``shape`` or ``pixel_size`` of a built-in Sun's builder."""
+    return inspect.signature(SUNS[sun]).parameters[name].default
+
+
+def _same(a, b):
+    """Whether two knob values are equal (Quantities in any equivalent unit)."""
+    try:
+        return bool(np.all(a == b)) and type(a) is type(b)
+    except (TypeError, ValueError, u.UnitsError):
+        return False
+
+
+def _photosphere_knobs(values, sun="milne-eddington", where="photosphere"):
+    """
+    The knobs of ``values`` that differ from ``sun``'s defaults, each checked against
+    its default's type and unit (the builder fills in the rest).
+    """
+    defaults = photosphere_defaults(sun)
     bad = [k for k in values if k not in defaults]
     if bad:
-        raise KeyError(f"unknown key(s) {bad} in [{where}]; valid keys are {sorted(defaults)}")
-    knobs = dict(defaults)
+        raise KeyError(f"unknown key(s) {bad} in [{where}] for sun = {sun!r}; valid keys are "
+                       f"{sorted(defaults)}")
+    knobs = {}
     for name, value in values.items():
         default = defaults[name]
         if isinstance(default, u.Quantity):
@@ -174,9 +206,14 @@ def _photosphere_knobs(values, where="photosphere"):
         elif isinstance(default, bool):
             if not isinstance(value, bool):
                 raise TypeError(f"[{where}] {name} must be true or false, got {value!r}")
+        elif isinstance(default, str):  # a choice, or "auto" standing for true/false
+            if not isinstance(value, (str, bool)):
+                raise TypeError(f"[{where}] {name} must be a string or true/false, got {value!r}")
         elif isinstance(value, bool) or not isinstance(value, (int, float)):
             raise TypeError(f"[{where}] {name} must be a number, got {value!r}")
-        knobs[name] = value
+        if not _same(value, default):
+            # An array Quantity (a height range) is held as a tuple of scalars, so that configs compare.
+            knobs[name] = tuple(value) if isinstance(value, u.Quantity) and value.ndim else value
     return knobs
 
 
@@ -241,17 +278,21 @@ class SimulationConfig:
         Tile magnifications of the quadrants in tiled mode.
     obstime : str
         ISO time of the observation.
-    photosphere_shape : tuple of int
-        Shape of the built-in model photosphere.
-    photosphere_pixel_size : `~astropy.units.Quantity`
-        Pixel size of the built-in model photosphere (length).
+    sun : str
+        The built-in Sun (a key of `SUNS`): ``"milne-eddington"`` (the column
+        photosphere, fast; default) or ``"model-atmosphere"`` (the 3-D model
+        atmosphere through LTE radiative transfer; tiled mode only).
+    photosphere_shape : tuple of int or None
+        Columns of the built-in Sun; None: that Sun's default (recorded).
+    photosphere_pixel_size : `~astropy.units.Quantity` or None
+        Their spacing (length); None: that Sun's default (recorded).
     workers : int or None
         Threads for the frames engine.
     effects : `Effects`
         The instrument effects that are on.
     photosphere : dict
-        Knobs of the built-in model photosphere (`photosphere_defaults`
-        completed by the values given).
+        Knobs of the built-in Sun that differ from its defaults
+        (`photosphere_defaults` lists them all).
     flat_file, dark_file : str or None
         A user-supplied flat or dark: its FITS path, or ``"<array>"`` when it
         was passed as an array (None: the instrument's synthetic one).
@@ -277,8 +318,9 @@ class SimulationConfig:
     detector_shape: int | None = None
     resolutions: tuple = (1, 2, 4, 8)
     obstime: str = DEFAULT_OBSTIME
-    photosphere_shape: tuple = (1024, 1024)
-    photosphere_pixel_size: u.Quantity = 96 * u.km
+    sun: str = "milne-eddington"
+    photosphere_shape: tuple | None = None
+    photosphere_pixel_size: u.Quantity | None = None
     workers: int | None = None
     effects: Effects = field(default_factory=Effects)
     photosphere: dict = field(default_factory=dict)
@@ -289,6 +331,15 @@ class SimulationConfig:
     instrument: GONGInstrument = field(default_factory=GONGInstrument)
 
     def __post_init__(self):
+        if self.sun not in SUNS:
+            raise ValueError(f"sun must be one of {tuple(SUNS)}, got {self.sun!r}")
+        if self.sun == "model-atmosphere" and self.mode == "full-disk":
+            raise ValueError("sun = 'model-atmosphere' runs in mode = 'tiled' only: the full disk maps the "
+                             "'milne-eddington' Sun at every point's viewing angle")
+        if self.photosphere_shape is None:
+            object.__setattr__(self, "photosphere_shape", _sun_default(self.sun, "shape"))
+        if self.photosphere_pixel_size is None:
+            object.__setattr__(self, "photosphere_pixel_size", _sun_default(self.sun, "pixel_size"))
         for name, (unit, _) in _QUANTITIES.items():
             value = getattr(self, name)
             if not isinstance(value, u.Quantity) or not value.unit.is_equivalent(unit):
@@ -324,7 +375,7 @@ class SimulationConfig:
             raise TypeError(f"instrument must be a GONGInstrument, got {type(self.instrument).__name__}")
         if not isinstance(self.effects, Effects):
             raise TypeError(f"effects must be an Effects, got {type(self.effects).__name__}")
-        object.__setattr__(self, "photosphere", _photosphere_knobs(dict(self.photosphere)))
+        object.__setattr__(self, "photosphere", _photosphere_knobs(dict(self.photosphere), self.sun))
         for name in ("flat", "dark"):
             path, digest = getattr(self, f"{name}_file"), getattr(self, f"{name}_sha256")
             if (path is None) != (digest is None):
@@ -364,6 +415,10 @@ class SimulationConfig:
         """
         Return a copy with some fields changed (validated again).
 
+        A change of ``sun`` also moves ``photosphere_shape`` and
+        ``photosphere_pixel_size`` to the new Sun's defaults where they held the
+        old Sun's defaults (and were not changed too).
+
         Parameters
         ----------
         **changes
@@ -373,7 +428,23 @@ class SimulationConfig:
         -------
         `SimulationConfig`
         """
+        if changes.get("sun", self.sun) != self.sun:
+            for name, key in (("photosphere_shape", "shape"), ("photosphere_pixel_size", "pixel_size")):
+                if name not in changes and _same(getattr(self, name), _sun_default(self.sun, key)):
+                    changes[name] = None
         return dataclasses.replace(self, **changes)
+
+    def sun_arguments(self):
+        """
+        The keyword arguments of the built-in Sun's builder (``SUNS[sun]``) but the seed.
+
+        Returns
+        -------
+        dict
+        """
+        knobs = {name: u.Quantity(value) if isinstance(value, tuple) else value
+                 for name, value in self.photosphere.items()}
+        return {"shape": self.photosphere_shape, "pixel_size": self.photosphere_pixel_size, **knobs}
 
     def simulation_arguments(self):
         """
@@ -413,8 +484,9 @@ class SimulationConfig:
         doc.add("effects", toml_table(
             [(name, value, "") for name, value in dataclasses.asdict(self.effects).items()],
             comments=comments))
+        knobs = {**photosphere_defaults(self.sun), **self.photosphere}
         doc.add("photosphere", toml_table(
-            [(name, value, "") for name, value in self.photosphere.items()], comments=comments))
+            [(name, value, "") for name, value in knobs.items()], comments=comments))
         doc.add("instrument", self.instrument.toml_table(comments=comments))
         return tomlkit.dumps(doc)
 
@@ -477,7 +549,7 @@ class SimulationConfig:
                 sim[name] = tuple(sim[name])
         return cls(instrument=GONGInstrument.from_dict(table.get("instrument", {})),
                    effects=Effects.from_dict(table.get("effects", {})),
-                   photosphere=_photosphere_knobs(table.get("photosphere", {})), **sim)
+                   photosphere=table.get("photosphere", {}), **sim)
 
 
 def _as_path(source):
@@ -502,7 +574,9 @@ def _read_text(path):
 
 
 def _quantity(name, value, unit, where="simulation"):
-    """A TOML value (a string such as "7 Mm", or a Quantity) as a Quantity convertible to ``unit``."""
+    """A TOML value (a string such as "7 Mm", or a Quantity, or a list of them) as a Quantity in ``unit``."""
+    if isinstance(value, (list, tuple)):
+        return u.Quantity([_quantity(name, v, unit, where) for v in value])
     if isinstance(value, str):
         try:
             value = u.Quantity(value)

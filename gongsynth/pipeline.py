@@ -148,7 +148,7 @@ class Sweep(list):
 
 def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="blocks", seed=None,
              instrument=None, mode="tiled", detector_shape=None, resolutions=(1, 2, 4, 8),
-             obstime=None, photosphere_shape=(1024, 1024), photosphere_pixel_size=96 * u.km,
+             obstime=None, sun="milne-eddington", photosphere_shape=None, photosphere_pixel_size=None,
              effects=None, photosphere=None, flat=None, dark=None, workers=None, progress=True,
              config=None):
     """
@@ -160,7 +160,7 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="bl
         Input spectra (e.g. RH output of an MHD snapshot) at the viewing angle
         of ``latitude``, or a model atmosphere (e.g. a MURaM snapshot) that
         `gongsynth.rt.synthesize` turns into spectra at that viewing angle.
-        Default: the built-in model photosphere, synthesised at that latitude.
+        Default: the built-in Sun chosen by ``sun``, synthesised at that latitude.
     latitude : `~astropy.units.Quantity`
         Heliographic latitude of the field centre on the central meridian.
     duration : `~astropy.units.Quantity`
@@ -178,16 +178,23 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="bl
         Tiled mode: tile magnification of each quadrant.
     obstime : str or `~astropy.time.Time`, optional
         Observation time (default: a date with B0 ≈ 0).
-    photosphere_shape : tuple of int
-        Pixels of the built-in model photosphere (used when ``stokes`` is None).
-    photosphere_pixel_size : `~astropy.units.Quantity`
-        Its pixel size (length; 96 km like the paper's binned MURaM cube).
+    sun : {"milne-eddington", "model-atmosphere"}
+        The built-in Sun (used when ``stokes`` is None): the column photosphere
+        through Milne-Eddington synthesis (fast; one line strength everywhere,
+        a toy for calibration), or the 3-D model atmosphere
+        (`gongsynth.sun.model_atmosphere.model_atmosphere`) through LTE
+        radiative transfer along the rays at ``latitude`` (tiled mode only).
+    photosphere_shape : tuple of int, optional
+        Columns of the built-in Sun (default: 1024 × 1024 for
+        ``"milne-eddington"``, the model atmosphere's own default otherwise).
+    photosphere_pixel_size : `~astropy.units.Quantity`, optional
+        Their spacing (length; default 96 km like the paper's binned MURaM cube).
     effects : `~gongsynth.config.Effects` or dict, optional
         Instrument effects to switch off, e.g. ``{"photon_noise": False}``
         (default: all on).
     photosphere : dict, optional
-        Knobs of the built-in model photosphere
-        (`~gongsynth.sun.photosphere.model_photosphere`), e.g.
+        Knobs of the built-in Sun (`~gongsynth.sun.photosphere.model_photosphere`
+        or `~gongsynth.sun.model_atmosphere.model_atmosphere`), e.g.
         ``{"spot": False}``.
     flat, dark : optional
         Detector flat field and dark map, arrays or FITS paths (see
@@ -221,7 +228,8 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="bl
     """
     arguments = dict(latitude=latitude, duration=duration, engine=engine, seed=seed, instrument=instrument,
                      mode=mode, detector_shape=detector_shape, resolutions=resolutions, obstime=obstime,
-                     photosphere_shape=photosphere_shape, photosphere_pixel_size=photosphere_pixel_size,
+                     sun=sun, photosphere_shape=photosphere_shape,
+                     photosphere_pixel_size=photosphere_pixel_size,
                      effects=effects, photosphere=photosphere, workers=workers)
     if config is None:
         given = _given(arguments)

@@ -29,6 +29,8 @@ def toml_plain(value):
     ('3.6 arcsec', [1, 2])
     """
     if isinstance(value, u.Quantity):
+        if value.ndim:  # e.g. a height range: a list of quantities
+            return [toml_plain(v) for v in value]
         if value.unit == u.dimensionless_unscaled:
             return float(value.value)
         return f"{float(value.value)!r} {value.unit.to_string()}"

@@ -1,3 +1,5 @@
+import inspect
+
 import astropy.units as u
 import pytest
 
@@ -65,3 +67,34 @@ def test_effects_round_trip_and_unknown_effect():
 def test_flat_record_needs_both_path_and_digest():
     with pytest.raises(ValueError, match="flat_sha256"):
         SimulationConfig(flat_file="flat.fits")
+
+
+def test_the_built_in_sun_and_its_defaults():
+    """Shape and spacing default to the chosen Sun's builder; a change of Sun moves them along."""
+    from gongsynth.config import SUNS, photosphere_defaults
+    me = SimulationConfig(seed=1)
+    assert me.sun == "milne-eddington" and me.photosphere_shape == (1024, 1024)
+    atm = me.replace(sun="model-atmosphere")
+    signature = inspect.signature(SUNS["model-atmosphere"]).parameters
+    assert atm.photosphere_shape == tuple(signature["shape"].default)
+    assert atm.photosphere_pixel_size == signature["pixel_size"].default
+    assert atm.replace(sun="milne-eddington") == me
+    kept = me.replace(photosphere_shape=(128, 128)).replace(sun="model-atmosphere")
+    assert kept.photosphere_shape == (128, 128)             # a shape the user chose stays
+    assert SimulationConfig.from_toml(atm.to_toml()) == atm  # height_range etc. round trip
+    assert "element_field" in photosphere_defaults("model-atmosphere")
+
+
+def test_knobs_belong_to_the_chosen_sun():
+    with pytest.raises(KeyError, match="for sun = 'model-atmosphere'"):
+        SimulationConfig(sun="model-atmosphere", photosphere={"umbra_radius_km": 1})
+    with pytest.raises(KeyError, match="height_range"):
+        SimulationConfig(photosphere={"height_range": ["-500 km", "600 km"]})
+    cfg = SimulationConfig(sun="model-atmosphere", photosphere={"spot": False, "element_field": "1.3 kG",
+                                                                "height_range": ["-500 km", "600 km"]})
+    assert cfg.photosphere["element_field"] == 1.3 * u.kG
+    assert SimulationConfig.from_toml(cfg.to_toml()) == cfg
+    with pytest.raises(ValueError, match="sun must be one of"):
+        SimulationConfig(sun="muram")
+    with pytest.raises(ValueError, match="runs in mode = 'tiled' only"):
+        SimulationConfig(sun="model-atmosphere", mode="full-disk")

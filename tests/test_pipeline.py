@@ -312,3 +312,23 @@ def test_a_cube_too_narrow_for_the_channels_is_refused_before_any_work(disk_cent
     assert isinstance(narrow, StokesCube)
     with pytest.raises(ValueError, match="wavelength"):
         gongsynth.simulate(narrow, config=cfg, progress=False)
+
+
+def test_the_model_atmosphere_sun_goes_through_the_radiative_transfer():
+    """sun='model-atmosphere': the photosphere stage builds the 3-D atmosphere from the run's seed,
+    the synthesis stage is rt.synthesize at the pointing's mu and azimuth (60 deg here)."""
+    from gongsynth.geometry import Pointing
+    from gongsynth.seeding import child_sequence
+    from gongsynth.sun.model_atmosphere import model_atmosphere
+
+    cfg = SimulationConfig(seed=4, sun="model-atmosphere", latitude=60 * u.deg, photosphere_shape=(24, 24),
+                           photosphere={"spot": False}, detector_shape=16, resolutions=(1,),
+                           duration=1 * u.min)
+    state = build_chain(cfg).run(until="synthesis", progress=False)
+    atm = model_atmosphere((24, 24), seed=child_sequence(4, "photosphere"), spot=False)
+    assert np.array_equal(state["photosphere"].raw("temperature"), atm.raw("temperature"))
+    pointing = Pointing(60 * u.deg, cfg.obstime)
+    cube = gongsynth.rt.synthesize(atm, mu=pointing.mu, azimuth=pointing.los_azimuth, progress=False)
+    assert state["stokes"].mu == pytest.approx(0.5, abs=0.01)
+    assert np.array_equal(state["stokes"].V.value, cube.V.value)
+    assert np.array_equal(state["stokes"].blos.value, cube.blos.value)
