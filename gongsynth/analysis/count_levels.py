@@ -302,7 +302,7 @@ def _simulated_levels(raw, continuum, expected, inst, max_radius, scale):
     diodes = np.full(N_CHANNELS, np.nan)
     on_disk = rho < 1
     expected_disk = math.pi * (continuum.rsun_obs / (_pixel_area(continuum) ** 0.5)).to_value(u.one) ** 2
-    if on_disk.sum() >= 0.99 * expected_disk:  # the whole disk is in the field
+    if on_disk.sum() >= 0.98 * expected_disk:  # the whole disk is in the field
         per_frame = _corrected_planes(raw, inst) * scale / frames[:, None, None]
         phase = 0.5 * (per_frame[:N_CHANNELS] + per_frame[N_CHANNELS:])
         diodes = np.nansum(phase, axis=(1, 2)) / on_disk.sum()
