@@ -87,6 +87,9 @@ DIODE_KEYWORDS = ("DIODE1", "DIODE2", "DIODE3")
 #: (each the mean of I+V and I-V, the default) or over all 6 planes.
 PHASE_PLANES = (3, 6)
 
+#: Pixels darker than this fraction of the region's 90th percentile (sunspots,
+#: pores) are left out of a disk-centre level.
+_QUIET_FRACTION = 0.9
 _PER_PLANE = "frame, pixel, plane"
 _PER_DISK = "frame, on-disk pixel, phase plane"
 
@@ -177,6 +180,12 @@ def _centre_mask(smap, max_radius, name):
     return rho, mask
 
 
+def _quiet_level(values):
+    """Median of the quiet-Sun pixels: those at least 0.9 of the 90th percentile."""
+    values = values[np.isfinite(values)]
+    return float(np.median(values[values >= _QUIET_FRACTION * np.percentile(values, 90)]))
+
+
 def _check_choice(phase_planes, max_radius):
     if phase_planes not in PHASE_PLANES:
         raise ValueError(f"phase_planes must be one of {PHASE_PLANES}, got {phase_planes!r}")
@@ -198,7 +207,9 @@ def real_count_levels(real, *, intensity=None, max_radius=0.1, phase_planes=3, t
         The real intensity image; default ``real`` itself when it is one
         (``IMTYPE = 'INTENSITY'``).
     max_radius : float
-        Disk-centre region, in solar radii (default 0.1; the median is taken).
+        Disk-centre region, in solar radii (default 0.1).  The level is the
+        median of its quiet pixels: those at least 0.9 of the region's 90th
+        percentile (sunspots and pores are left out).
     phase_planes : {3, 6}
         Planes summed in the intensity image (module notes; default 3).
     truncate_bits : int
@@ -250,7 +261,7 @@ def real_count_levels(real, *, intensity=None, max_radius=0.1, phase_planes=3, t
     if intensity is not None:
         rho, mask = _centre_mask(intensity, max_radius, "the intensity image")
         values = np.asarray(intensity.data, dtype=float)
-        centre_image = float(np.nanmedian(values[mask]))
+        centre_image = _quiet_level(values[mask])
         check = float(np.nansum(values) / (accum / scale * np.sum(diode.value)))
     centre = centre_image * scale / (phase_planes * accum) * u.adu
     return RealCountLevels(accum=accum, centre=centre, centre_image=centre_image * u.one, diode=diode,
@@ -268,7 +279,7 @@ def _simulated_parts(simulated, instrument):
     if instrument is None and config is not None:
         instrument = getattr(config, "instrument", None)
     inst = resolve_instrument(instrument)
-    return raw, continuum, getattr(simulated, "expected_counts", None), inst
+    return raw, continuum, getattr(simulated, "expected_counts", None), inst, getattr(config, "mode", None)
 
 
 def _corrected_planes(raw, inst):
@@ -283,7 +294,18 @@ def _corrected_planes(raw, inst):
     return planes
 
 
-def _simulated_levels(raw, continuum, expected, inst, max_radius, scale):
+def _is_full_disk(continuum, mode, rho, values):
+    """Whether a simulated map shows the whole disk on a dark sky (a full-disk run)."""
+    mode = continuum.meta.get("simmode", mode)
+    on_disk = rho < 1
+    radius_px = (continuum.rsun_obs / _pixel_area(continuum) ** 0.5).to_value(u.one)
+    if (mode is not None and mode != "full-disk") or on_disk.sum() < 0.98 * math.pi * radius_px**2:
+        return False
+    sky = values[rho > 1.05]
+    return sky.size == 0 or np.nanmean(sky) < 0.05 * np.nanmean(values[on_disk])
+
+
+def _simulated_levels(raw, continuum, expected, inst, max_radius, scale, mode=None):
     """Per-frame, per-plane levels (adu) of a simulation: centre (expected, continuum), disk DIODEs."""
     rho, mask = _centre_mask(continuum, max_radius, "the simulated map")
     frames = np.asarray(raw.frames_per_plane, dtype=float)
@@ -292,20 +314,18 @@ def _simulated_levels(raw, continuum, expected, inst, max_radius, scale):
     gain = inst.gain.to_value(u.electron / u.adu)
     # The pseudo-continuum is the sum of the six corrected planes in DN (1 DN = 2**b adu).
     values = np.asarray(getattr(continuum.data, "value", continuum.data), dtype=float)
-    from_continuum = float(np.nanmedian(values[mask])) * scale / frames.sum()
+    from_continuum = _quiet_level(values[mask]) * scale / frames.sum()
     from_expected = np.nan
     if expected is not None:
         counts = u.Quantity(expected).to_value(u.electron)
         if counts.shape != (N_PLANES,) + values.shape:
             raise ValueError(f"expected counts of shape {counts.shape} do not match the map {values.shape}")
-        from_expected = float(np.median(counts.mean(axis=0)[mask])) / gain
+        from_expected = _quiet_level(counts.mean(axis=0)[mask]) / gain
     diodes = np.full(N_CHANNELS, np.nan)
-    on_disk = rho < 1
-    expected_disk = math.pi * (continuum.rsun_obs / (_pixel_area(continuum) ** 0.5)).to_value(u.one) ** 2
-    if on_disk.sum() >= 0.98 * expected_disk:  # the whole disk is in the field
+    if _is_full_disk(continuum, mode, rho, values):
         per_frame = _corrected_planes(raw, inst) * scale / frames[:, None, None]
         phase = 0.5 * (per_frame[:N_CHANNELS] + per_frame[N_CHANNELS:])
-        diodes = np.nansum(phase, axis=(1, 2)) / on_disk.sum()
+        diodes = np.nansum(phase, axis=(1, 2)) / np.count_nonzero(rho < 1)
     mu = float(np.mean(np.sqrt(np.clip(1 - rho[mask] ** 2, 0, None))))
     return from_expected, from_continuum, diodes, mu
 
@@ -332,8 +352,9 @@ def count_levels(real, simulated, *, intensity=None, instrument=None, max_radius
         The simulation's instrument (gain, truncation, effective area);
         default ``simulated.config.instrument``, else the default GONG.
     max_radius : float
-        Disk-centre region in solar radii (default 0.1); levels are medians
-        over it, so a sunspot in the field does not pull them down.
+        Disk-centre region in solar radii (default 0.1).  Levels are medians
+        of its quiet pixels (at least 0.9 of the region's 90th percentile), so
+        the sunspots of gongsynth's tiled Sun do not pull them down.
     phase_planes : {3, 6}
         Planes summed in the real intensity image (default 3; module notes).
 
@@ -347,7 +368,8 @@ def count_levels(real, simulated, *, intensity=None, instrument=None, max_radius
         area at which the simulation would reach the real level.  Rows:
         the disk centre from the expected (noise-free) counts and from the
         pseudo-continuum, and the DIODE sums per on-disk pixel (simulated only
-        for a full-disk run; NaN otherwise).  ``meta`` holds the inputs of the
+        for a full-disk run, whose sky is dark: the sum of each channel's
+        per-frame level over the field, per on-disk pixel; NaN otherwise).  ``meta`` holds the inputs of the
         conversion (``accum``, ``frames_per_plane``, ``truncate_bits``,
         ``gain``, ``pixel_area_ratio``, ``effective_area``, ``diode_check``,
         the disk-centre levels in image counts, ``simulated_mu``).
@@ -383,14 +405,14 @@ def count_levels(real, simulated, *, intensity=None, instrument=None, max_radius
     ('disk centre (pseudo-continuum)', <Quantity 650. adu>, <Quantity 2600. adu>, <Quantity 0.15 cm2>)
     """
     _check_choice(phase_planes, max_radius)
-    raw, continuum, expected, inst = _simulated_parts(simulated, instrument)
+    raw, continuum, expected, inst, mode = _simulated_parts(simulated, instrument)
     real_levels = real_count_levels(real, intensity=intensity, max_radius=max_radius,
                                     phase_planes=phase_planes, truncate_bits=inst.truncate_bits)
     header = getattr(raw, "header", None) or {}
     bits = int(header.get("TRUNCBIT", inst.truncate_bits))
     scale = 2**bits
     from_expected, from_continuum, sim_diodes, sim_mu = _simulated_levels(
-        raw, continuum, expected, inst, max_radius, scale)
+        raw, continuum, expected, inst, max_radius, scale, mode)
     area_ratio = float(real_levels.pixel_area / _pixel_area(continuum))
     if not np.isfinite(area_ratio):
         area_ratio = float((inst.plate_scale**2 / _pixel_area(continuum)).to_value(u.one))
