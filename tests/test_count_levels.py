@@ -229,3 +229,33 @@ def test_bad_inputs():
         (8, 8), ref, scale=[2.5, 2.5] * u.arcsec / u.pix))
     with pytest.raises(ValueError, match="disk centre"):
         count_levels(real, types.SimpleNamespace(raw=simulated.raw, continuum=away))
+
+
+def test_sunspots_do_not_pull_the_centre_level_down():
+    levels = np.array([600.0, 600.0, 600.0])
+    simulated, _ = _full_disk(levels)
+    real = _map((64, 64), 40.0, value=600.0 * 3 * 600 / 8)
+    real.meta.update({"imtype": "INTENSITY", "accum": 600})
+    rho, _ = disk_coordinates(real)
+    # Most of the disk-centre region (so that a plain median would fall in it)
+    # in a spot at 30 % of the quiet level, in both maps.
+    spot = (rho < 0.3) & (np.arange(64)[None, :] < 34)
+    assert 0.55 < spot.sum() / (rho < 0.3).sum() < 0.8
+    real.data[spot] *= 0.3
+    simulated.continuum.data[spot] *= 0.3
+    table = count_levels(real, simulated, max_radius=0.3)
+    assert table["real"][CENTRE].value == pytest.approx(600)
+    assert table["simulated"][CONTINUUM].value == pytest.approx(600)
+
+
+def test_a_tiled_field_over_the_whole_disk_is_not_a_full_disk():
+    simulated, _ = _full_disk(np.array([600.0, 600.0, 600.0]))
+    real = _map((64, 64), 40.0, value=600.0 * 3 * 600 / 8)
+    real.meta.update({"imtype": "INTENSITY", "accum": 600, "diode1": 1.0, "diode2": 1.0, "diode3": 1.0})
+    assert np.isfinite(count_levels(real, simulated)["simulated"][2:]).all()
+    simulated.continuum.meta["simmode"] = "tiled"
+    assert np.isnan(count_levels(real, simulated)["simulated"][2:]).all()
+    # Without a mode, a bright 'sky' (a scene tiled beyond the limb) says the same.
+    del simulated.continuum.meta["simmode"]
+    simulated.continuum.data[:] = simulated.continuum.data.max()
+    assert np.isnan(count_levels(real, simulated)["simulated"][2:]).all()

@@ -301,8 +301,8 @@ def _is_full_disk(continuum, mode, rho, values):
     radius_px = (continuum.rsun_obs / _pixel_area(continuum) ** 0.5).to_value(u.one)
     if (mode is not None and mode != "full-disk") or on_disk.sum() < 0.98 * math.pi * radius_px**2:
         return False
-    sky = values[rho > 1.05]
-    return sky.size == 0 or np.nanmean(sky) < 0.05 * np.nanmean(values[on_disk])
+    sky = values[(rho > 1.05) & np.isfinite(values)]  # gongsynth blanks its sky (NaN)
+    return sky.size == 0 or np.mean(sky) < 0.05 * np.nanmean(values[on_disk])
 
 
 def _simulated_levels(raw, continuum, expected, inst, max_radius, scale, mode=None):
