@@ -183,9 +183,12 @@ def _full_disk(levels, gain=33.0):
     return types.SimpleNamespace(raw=raw, continuum=continuum, expected_counts=expected), int(disk.sum())
 
 
-def test_full_disk_simulation_gets_diode_equivalents():
+@pytest.mark.parametrize("sky", [0.0, np.nan])  # gongsynth's full-disk maps blank the sky with NaN
+def test_full_disk_simulation_gets_diode_equivalents(sky):
     levels = np.array([500.0, 600.0, 700.0])
     simulated, n_disk = _full_disk(levels)
+    rho, _ = disk_coordinates(simulated.continuum)
+    simulated.continuum.data[rho > 1] = sky
     real = _map((64, 64), 40.0, value=600.0 * 3 * 600 / 8)
     diodes = [250.0 * n_disk, 300.0 * n_disk, 350.0 * n_disk]
     real.meta.update({"imtype": "INTENSITY", "accum": 600,
