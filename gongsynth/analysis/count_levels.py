@@ -51,8 +51,12 @@ Other readings, and why they are not the default:
 
 * *The image sums all six planes* (``phase_planes=6``): half the level per
   frame, 325 adu.  gongsynth at 325 adu per frame gives a nine-minute-average
-  magnetogram noise of 5.4 G, more than the real map's whole pixel-difference
-  scatter (3.2 G, an upper bound on its noise); at 650 adu it gives 3.1 G.
+  magnetogram noise of 5.4 G, 1.7 times the real map's whole pixel-difference
+  scatter in its quietest box (3.25 G, an upper bound on its noise); at
+  650 adu it gives 3.1 G.  GONG's reduction interpolates each image once
+  (``GHIST``: UCOR rotates it by 1.8°), which lowers pixel noise by an amount
+  not known here; only a reduction by more than 40 % would save this reading,
+  so it is disfavoured rather than excluded.
 * *The image is the mean of the planes*: 1950 adu per frame, so that a
   one-minute plane would hold (1950 + 182 dither) × 600 / 8 ≈ 160 000 DN,
   which does not fit the 16-bit planes that the 3-bit truncation exists for
