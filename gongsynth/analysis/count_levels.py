@@ -11,9 +11,8 @@ matching area is :math:`A_\mathrm{eff} \times` real / simulated, with both
 levels taken per unit solid angle (the real pixel, 2.56″ in 2009, is not
 gongsynth's 2.5″).
 
-What the real header says, and how it is read here
---------------------------------------------------
-GONG site files (old header) carry, besides the image:
+**What the real header says, and how it is read here.**  GONG site files
+(old header) carry, besides the image:
 
 ``ACCUM = 600`` ("per minute accumulations")
     Camera frames accumulated per minute in **each** of the six raw planes:
