@@ -14,8 +14,11 @@ The two Suns differ on purpose: the simulated field holds a sunspot and
 plage, the real one is the quiet Sun of a solar minimum.  What should agree is
 what the instrument adds: the noise in the quietest 60″ box near disk centre
 (the real map's is 4.0 G in ``PROVENANCE.md``), and the pixel-to-pixel
-noise.  The real file lives in the project's ``shared/data/real`` folder,
-outside the repository.
+noise.  That noise follows the number of photons, so the last section sets the
+simulated count level next to the real one (from the intensity image of the
+same minute and the header's ``ACCUM`` and ``DIODE1``-``DIODE3``).  The real
+files live in the project's ``shared/data/real`` folder, outside the
+repository.
 """
 # sphinx_gallery_thumbnail_number = 1
 import os
@@ -28,6 +31,7 @@ from matplotlib.colors import Normalize
 
 import gongsynth
 from gongsynth.analysis.compare import compare
+from gongsynth.analysis.count_levels import count_levels
 from gongsynth.analysis.noise import noise_estimate
 
 # The real files: the project's shared/data/real (the docs build sets the variable).
@@ -37,7 +41,8 @@ REAL = Path(os.environ.get("GONGSYNTH_REAL_DATA", "shared/data/real"))
 # The two magnetograms
 # --------------------
 real = gongsynth.load_observation(REAL / "gong" / "bbbqa090905t1854.fits.gz")
-simulated = gongsynth.simulate(seed=1, duration=10 * u.min, progress=False).magnetogram
+result = gongsynth.simulate(seed=1, duration=10 * u.min, progress=False)
+simulated = result.magnetogram
 
 fig = plt.figure(figsize=(11, 5), layout="constrained")
 for number, (smap, title) in enumerate(((real, "real GONG, Big Bear 2009-09-05"),
@@ -68,3 +73,23 @@ for label, smap in (("real", real), ("simulated", simulated)):
 report = compare(simulated, real, labels=("gongsynth", "GONG Big Bear"), fig=plt.figure(figsize=(13, 8)))
 print(report.summary())
 plt.show()
+
+# %%
+# Count levels
+# ------------
+#
+# One scale for both: adu per camera frame per pixel in one of the six planes.
+# The real intensity image is the sum over the three phase planes of
+# one-minute planes of ``ACCUM`` = 600 frames in DN (1 DN = 8 adu), so its
+# disk-centre 146 000 counts are 146 000 × 8 / (3 × 600) ≈ 650 adu per frame;
+# ``DIODE1``-``DIODE3`` are the per-frame sums of the three phase planes over
+# the camera's pixels (`gongsynth.analysis.count_levels` explains the reading
+# and the alternatives).  ``effective_area`` is the area at which gongsynth,
+# per unit solid angle, would reach the real level: counts scale linearly
+# with it.  The DIODE rows need a full-disk run (``mode="full-disk"``).
+intensity = gongsynth.load_observation(REAL / "gong" / "bbiqa090905t1854.fits.gz", kind="continuum")
+levels = count_levels(intensity, result)
+for name in ("real", "simulated", "ratio", "effective_area"):
+    levels[name].info.format = ".3g"
+levels.pprint(max_width=120)
+print(f"DIODE check, image sum / (ACCUM / 8 × ΣDIODE): {levels.meta['diode_check']:.4f}")
