@@ -81,7 +81,8 @@ def run_case(atm, mu, line):
     rows = []
     for gamma in INCLINATIONS:
         fields = ((0.0,) if gamma == 0 else ()) + FIELDS
-        ref = lightweaver_stokes(atm, np.array(fields) * u.G, inclination=gamma * u.deg, mu=mu, wavelength=LAM)
+        ref = lightweaver_stokes(atm, np.array(fields) * u.G, inclination=gamma * u.deg, mu=mu,
+                                 wavelength=LAM)
         for k, b in enumerate(fields):
             ours = synthesize(with_field(atm, b, gamma), mu=mu, wavelength=LAM, progress=False, line=line)
             rows.append((b, gamma, *compare(ours, ref, k)))

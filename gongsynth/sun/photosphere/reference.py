@@ -218,7 +218,7 @@ def lightweaver_state(atmosphere):
     >>> sorted(state)
     ['electron_density', 'hydrogen_density', 'microturbulence', 'temperature', 'vz', 'z']
     """
-    from gongsynth.sun.atmosphere import Atmosphere   # late: same layer, heavy import
+    from gongsynth.sun.atmosphere import Atmosphere  # late: same layer, heavy import
 
     if not isinstance(atmosphere, Atmosphere):
         raise TypeError(f"atmosphere must be a gongsynth.Atmosphere, got {type(atmosphere).__name__}")
@@ -282,7 +282,8 @@ def heated_atmosphere(atmosphere, temperature_offset):
     if np.any(temp <= 0):
         raise ValueError(f"temperature_offset {temperature_offset} makes the temperature non-positive")
     st = solve_state(temp, gas_pressure=np.asarray(p, dtype=np.float64))
-    unit = {"gas_pressure": u.Unit("dyn cm-2"), "density": u.Unit("g cm-3"), "electron_density": u.Unit("cm-3")}
+    unit = {"gas_pressure": u.Unit("dyn cm-2"), "density": u.Unit("g cm-3"),
+            "electron_density": u.Unit("cm-3")}
     return atmosphere.replace(temperature=temp * u.K, **{k: st[k] * unit[k] for k in unit})
 
 
@@ -470,6 +471,6 @@ def refined_atmosphere(atmosphere, factor):
         else:
             fine = np.interp(zz, z, col)
         args[name] = fine[..., None, None] * unit
-    from gongsynth.sun.atmosphere import Atmosphere   # late: same layer, heavy import
+    from gongsynth.sun.atmosphere import Atmosphere  # late: same layer, heavy import
     return Atmosphere(args.pop("temperature"), zz * u.km, atmosphere.pixel_size, meta=dict(atmosphere.meta),
                       **args)
