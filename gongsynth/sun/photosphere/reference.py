@@ -295,7 +295,8 @@ def lightweaver_stokes(atmosphere, field, *, inclination=0 * u.deg, mu=1.0, wave
     Parameters
     ----------
     atmosphere : `~gongsynth.Atmosphere`
-        A horizontally uniform (1-D) model; its magnetic field is ignored.
+        A horizontally uniform (1-D) model with vertical velocities only (v_z > 0
+        upward, a blueshift at μ = 1 in both codes); its magnetic field is ignored.
     field : `~astropy.units.Quantity`, scalar or (n,)
         Uniform field strengths (G); one output column per value.
     inclination : `~astropy.units.Quantity`, optional
@@ -378,7 +379,7 @@ def lightweaver_stokes(atmosphere, field, *, inclination=0 * u.deg, mu=1.0, wave
                 lw.ScaleType.Geometric, depthScale=top(st["z"]) * 1e3,
                 temperature=top(st["temperature"]), ne=top(st["electron_density"]) * 1e6,
                 nHTot=top(st["hydrogen_density"]) * 1e6, vturb=top(st["microturbulence"]) * 1e3,
-                vlos=-top(st["vz"]) * 1e3,     # lightweaver's v_z is positive away from the observer at μ = 1
+                vlos=top(st["vz"]) * 1e3,      # lightweaver's v_z is positive upward too (blueshift at μ = 1)
                 B=np.full(n, b * 1e-4), gammaB=np.full(n, gamma), chiB=np.zeros(n), convertScales=False)
             atmos.rays([mu])
             for dst, src in zip(out, _emergent(lw, aset, spect, atmos, b > 0, lte_scattering, lam_out)):
