@@ -139,7 +139,7 @@ def test_tau_scale_solver_matches_gongsynth_hydrostatics():
 
 @needs_muram
 def test_subsurface_extension_against_muram():
-    """Below its table the extended HSRA follows MURaM's mean T (15 %) and pressure rise (10 %) 300-500 km down."""
+    """Below its table the extended HSRA follows MURaM's mean T (15 %) and P rise (10 %) at 300-500 km."""
     zg = np.linspace(-600, 700, 66)
     ref = reference_stratifications(tuple(zg))
     lt, temp, _ = muram_stats()
@@ -191,7 +191,8 @@ def test_anelastic_flow_divergence(quiet_box):
     grid = PeriodicGrid(48, 48, 96.0)
     z = quiet_box.z.value
     vert = np.gradient(rho[:, None, None] * v[2], z, axis=0)
-    horiz = np.stack([rho[k] * (grid.gradient(v[0, k])[0] + grid.gradient(v[1, k])[1]) for k in range(z.size)])
+    horiz = np.stack([rho[k] * (grid.gradient(v[0, k])[0] + grid.gradient(v[1, k])[1])
+                      for k in range(z.size)])
     sel = (z > -400) & (z < 600)
     assert np.sqrt(np.mean((vert + horiz)[sel] ** 2)) < 0.02 * np.sqrt(np.mean(vert[sel] ** 2))
     # Outflows from the granules: horizontal divergence positive where v_z > 0 at tau = 1.
@@ -242,8 +243,8 @@ def test_granulation_statistics_against_simulations(quiet_box):
     that of spatially averaged two-component models); the facts tested are the
     ones all three share: the ranges and the signs.
     """
-    stats = {"model": _granulation_facts(*model_stats(quiet_box)), "muram": _granulation_facts(*muram_stats()),
-             "ns": _granulation_facts(*ns_stats())}
+    stats = {"model": _granulation_facts(*model_stats(quiet_box)),
+             "muram": _granulation_facts(*muram_stats()), "ns": _granulation_facts(*ns_stats())}
     for name, s in stats.items():
         t0, v0, c0 = s[0.0]
         assert 150 < t0 < 1200, (name, t0)            # several hundred K at tau = 1
@@ -270,7 +271,7 @@ def _line_facts(cube):
 
 
 def test_continuum_contrast_and_mean_line(quiet_spectra):
-    """676.8 nm granulation contrast of order 10 % (Sun 13-15 %, MURaM 20 %); Ni I depth ~0.6-0.7, FWHM ~10 pm."""
+    """676.8 nm contrast of order 10 % (Sun 13-15 %, MURaM 20 %); Ni I depth ~0.6-0.7, FWHM ~10 pm."""
     contrast, depth, fwhm = _line_facts(quiet_spectra)
     assert 0.05 < contrast < 0.25
     assert 0.55 < depth < 0.8

@@ -107,8 +107,8 @@ def reference_stratifications(z_grid, granulation="brc", amplitude=1.0, element_
     shift_q = np.array([z[0, 0] - np.interp(lnp_match, lp[::-1], zg[::-1]) for lp in lnp0[1:]])
     t_grid, lnp_grid = st.place_on_grid(zg, z[:nq], t_all[:nq], p[:nq], np.concatenate([[0.0], shift_q]))
     mean_lnp = lnp_grid[0]
-    out = dict(a=_A_TABLE.copy(), mean_t=t_grid[0], mean_lnp=mean_lnp, quiet_t=t_grid[1:], quiet_lnp=lnp_grid[1:],
-               z_tau1_quiet=shift_q)
+    out = dict(a=_A_TABLE.copy(), mean_t=t_grid[0], mean_lnp=mean_lnp, quiet_t=t_grid[1:],
+               quiet_lnp=lnp_grid[1:], z_tau1_quiet=shift_q)
     for i, (key, field) in enumerate((("tube", element_field), ("umbra", umbra_field),
                                       ("penumbra", penumbra_field))):
         j = nq + i
@@ -175,7 +175,8 @@ def _add_internetwork(c, dc, ax, ay, dazdx, dazdy, curl, mag):
 def _scalar(q, unit, name, positive=True):
     check_quantity(q, unit, name)
     if np.ndim(q) != 0 or not np.isfinite(q.value) or (q.value <= 0 if positive else q.value < 0):
-        raise ValueError(f"{name} must be a {'positive' if positive else 'non-negative'} finite scalar, got {q}")
+        kind = "positive" if positive else "non-negative"
+        raise ValueError(f"{name} must be a {kind} finite scalar, got {q}")
     return float(q.to_value(unit))
 
 
@@ -273,7 +274,8 @@ def model_atmosphere(shape=(256, 256), pixel_size=96 * u.km, *, seed, nz=80,
     ((40, 32, 32), False)
     """
     if (not isinstance(shape, (tuple, list)) or len(shape) != 2
-            or not all(isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 8 for n in shape)):
+            or not all(isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 8
+                       for n in shape)):
         raise ValueError(f"shape must be two ints >= 8 (ny, nx), got {shape!r}")
     ny, nx = (int(n) for n in shape)
     if isinstance(nz, bool) or not isinstance(nz, (int, np.integer)) or nz < 16:
@@ -311,7 +313,8 @@ def model_atmosphere(shape=(256, 256), pixel_size=96 * u.km, *, seed, nz=80,
         if value > 6000:
             raise ValueError(f"{name} must be <= 6000 G, got {value} G")
     if r_u >= r_p:
-        raise ValueError(f"umbra_radius ({umbra_radius}) must be smaller than penumbra_radius ({penumbra_radius})")
+        raise ValueError(f"umbra_radius ({umbra_radius}) must be smaller than "
+                         f"penumbra_radius ({penumbra_radius})")
     fits = 2.2 * r_p <= min(ny, nx) * px
     if spot is True and not fits:
         raise ValueError(f"spot=True: the spot (penumbra_radius {penumbra_radius}) does not fit in the "
@@ -327,8 +330,8 @@ def model_atmosphere(shape=(256, 256), pixel_size=96 * u.km, *, seed, nz=80,
 
     zeros = np.zeros((ny, nx))
     if has_spot:
-        sp = spot_structure(grid, stage_generator(root, "model_atmosphere", _SPOT), r_umbra=r_u, r_penumbra=r_p,
-                            b_umbra=b_u, b_penumbra=b_p, v_evershed=v_e, v_moat=v_m)
+        sp = spot_structure(grid, stage_generator(root, "model_atmosphere", _SPOT), r_umbra=r_u,
+                            r_penumbra=r_p, b_umbra=b_u, b_penumbra=b_p, v_evershed=v_e, v_moat=v_m)
         keep_out = 0.5 * (1 + np.tanh((sp["r"] - r_p - 1500.0) / 500.0))
     else:
         sp = dict(umbra=zeros, penumbra=zeros, bz=zeros, vx=zeros, vy=zeros, evershed=zeros, moat=zeros,
