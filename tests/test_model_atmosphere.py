@@ -356,3 +356,20 @@ def test_sunspot(spot_box):
     vr = (v[0, k] * (xx + 0.5 - 48) + v[1, k] * (yy + 0.5 - 48)) / np.maximum(r / 96.0, 1e-9)
     assert vr[pen].mean() > 0.3                              # Evershed outflow
     assert b[2, k].mean() > 0                                # net positive polarity
+
+
+def test_ablation_switches():
+    """element_model='quiet', element_depression=False and canopy=False each remove one ingredient."""
+    base = dict(shape=(32, 32), seed=9, nz=40, spot=False, element_flux_density=150 * u.G)
+    ref = model_atmosphere(**base)
+    k = int(np.argmin(np.abs(ref.z.value - 300)))
+    cold = model_atmosphere(**base, element_model="quiet")
+    assert cold.raw("temperature")[k].max() < ref.raw("temperature")[k].max()
+    flat = model_atmosphere(**base, element_depression=False)
+    assert flat.meta["wilson_depression_km"]["element"] == 0.0 < ref.meta["wilson_depression_km"]["element"]
+    tubes = model_atmosphere(**base, canopy=False, internetwork_horizontal_field=0 * u.G,
+                             internetwork_field=0 * u.G)
+    b = tubes.raw("magnetic_field")
+    assert np.abs(b[:2]).max() == 0 and np.array_equal(b[2, 0], b[2, -1])
+    with pytest.raises(ValueError, match="canopy"):
+        model_atmosphere(**base, canopy="no")

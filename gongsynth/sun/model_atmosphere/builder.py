@@ -50,7 +50,7 @@ __all__ = ["model_atmosphere", "reference_stratifications", "GRANULATION_MODELS"
            "UMBRA_MODELS"]
 
 GRANULATION_MODELS = {"brc": ("granule_brc", "intergranule_brc"), "bbr": ("granule_bbr", "intergranule_bbr")}
-ELEMENT_MODELS = {"network": "network", "plage": "plage"}
+ELEMENT_MODELS = {"network": "network", "plage": "plage", "quiet": "hsra"}
 UMBRA_MODELS = {"maltby-m": "umbra_m", "maltby-e": "umbra_e"}
 
 #: Thermal weights a tabulated (interpolated linearly in between; a is clipped to this range).
@@ -62,7 +62,7 @@ _GRANULES, _ELEMENTS, _INTERNETWORK, _SPOT = range(4)
 @functools.lru_cache(maxsize=8)
 def reference_stratifications(z_grid, granulation="brc", amplitude=1.0, element_model="network",
                               element_field=1500.0, umbra_model="maltby-m", umbra_field=3000.0,
-                              penumbra_field=1500.0):
+                              penumbra_field=1500.0, element_depression=True):
     """
     The 1-D components on the height grid (cached: they depend only on these arguments).
 
@@ -76,6 +76,8 @@ def reference_stratifications(z_grid, granulation="brc", amplitude=1.0, element_
         Scale of the granulation's ΔT.
     element_field, umbra_field, penumbra_field : float
         G at each model's own τ = 1 (for the pressure balance).
+    element_depression : bool
+        False (an ablation only): the element model is not sunk, its τ = 1 stays at z = 0.
 
     Returns
     -------
@@ -114,6 +116,8 @@ def reference_stratifications(z_grid, granulation="brc", amplitude=1.0, element_
         j = nq + i
         p_tau1 = float(np.exp(np.interp(0.0, z[j], np.log(p[j]))))
         depth = st.pressure_balance_depth(zg, mean_lnp, p_tau1, field)
+        if key == "tube" and not element_depression:
+            depth = 0.0
         t_k, lnp_k = st.place_on_grid(zg, z[j:j + 1], t_all[j:j + 1], p[j:j + 1], depth)
         out[f"{key}_t"], out[f"{key}_lnp"], out[f"z_{key}"] = t_k[0], lnp_k[0], depth
     out["density"] = solve_state(out["mean_t"], gas_pressure=np.exp(mean_lnp))["density"]
@@ -197,6 +201,7 @@ def model_atmosphere(shape=(256, 256), pixel_size=96 * u.km, *, seed, nz=80,
                      granulation_models="brc", granulation_amplitude=1.0,
                      granulation_velocity=2.0 * u.km / u.s, velocity_decay_height=250 * u.km,
                      element_flux_density=20 * u.G, element_field=1500 * u.G, element_model="network",
+                     element_depression=True, canopy=True,
                      positive_fraction=0.6, internetwork_field=10 * u.G,
                      internetwork_horizontal_field=50 * u.G, umbra_radius=7 * u.Mm,
                      penumbra_radius=16 * u.Mm, umbra_field=3000 * u.G, penumbra_field=1500 * u.G,
@@ -238,8 +243,15 @@ def model_atmosphere(shape=(256, 256), pixel_size=96 * u.km, *, seed, nz=80,
         Mean unsigned flux density of the kG elements over the box (20 G).
     element_field : `~astropy.units.Quantity`, optional
         Field strength of an element at its own τ = 1 (1500 G).
-    element_model : {"network", "plage"}, optional
-        Temperature stratification of the elements (Solanki's models).
+    element_model : {"network", "plage", "quiet"}, optional
+        Temperature stratification T(log τ) of the elements: Solanki's network
+        or plage models, or (an ablation) the quiet HSRA: no hot tubes.
+    element_depression : bool, optional
+        Sink the elements by their Wilson depression (default); False is an
+        ablation (no pressure balance).
+    canopy : bool, optional
+        Spread the element field with height as a potential field (default);
+        False is an ablation: vertical tubes of constant field, no canopy.
     positive_fraction : float, optional
         Fraction of the element flux of positive polarity (0.6).
     internetwork_field, internetwork_horizontal_field : `~astropy.units.Quantity`, optional
@@ -288,6 +300,9 @@ def model_atmosphere(shape=(256, 256), pixel_size=96 * u.km, *, seed, nz=80,
     if not (z_lo <= -200 and z_hi >= 400):
         raise ValueError(f"height_range must reach at least 200 km below and 400 km above tau = 1, got "
                          f"{height_range}")
+    for name, value in (("element_depression", element_depression), ("canopy", canopy)):
+        if not isinstance(value, (bool, np.bool_)):
+            raise ValueError(f"{name} must be True or False, got {value!r}")
     if spot not in (True, False, "auto"):
         raise ValueError(f"spot must be True, False or 'auto', got {spot!r}")
     gran = _scalar(granule_size, u.km, "granule_size")
@@ -323,7 +338,7 @@ def model_atmosphere(shape=(256, 256), pixel_size=96 * u.km, *, seed, nz=80,
 
     zg = np.linspace(z_lo, z_hi, int(nz))
     ref = reference_stratifications(tuple(zg), granulation_models, amp, element_model, b_el, umbra_model,
-                                    b_u, b_p)
+                                    b_u, b_p, bool(element_depression))
     root = as_seed_sequence(seed)
     grid = PeriodicGrid(ny, nx, px)
     a, vpat, lanes = granulation_pattern(grid, stage_generator(root, "model_atmosphere", _GRANULES), gran)
@@ -374,13 +389,16 @@ def model_atmosphere(shape=(256, 256), pixel_size=96 * u.km, *, seed, nz=80,
     dazdx, dazdy = grid.gradient(az)
     curl = grid.gradient(ay)[0] - grid.gradient(ax)[1]
     pot = (ax, ay, dazdx, dazdy, curl)
-    spectra, bases = [grid.fft(bz_el).astype(np.complex64)], [ref["z_tube"]]
+    spectra, bases = ([grid.fft(bz_el).astype(np.complex64)], [ref["z_tube"]]) if canopy else ([], [])
     if has_spot:
         spectra.append(grid.fft(sp["bz"]).astype(np.complex64))
         bases.append(ref["z_umbra"])
     mag = np.empty_like(vel)
-    for k in range(zg.size):
+    mag[...] = 0.0
+    for k in range(zg.size if spectra else 0):
         mag[0, k], mag[1, k], mag[2, k] = fe.potential_layer(grid, spectra, bases, zg[k])
+    if not canopy:
+        mag[2] += bz_el.astype(np.float32)
     c, dc = fe.internetwork_profile(zg)
     _add_internetwork(c, dc, *pot, mag)
 
@@ -394,7 +412,8 @@ def model_atmosphere(shape=(256, 256), pixel_size=96 * u.km, *, seed, nz=80,
                    "spot": spot, "granule_size_km": gran, "granulation_models": granulation_models,
                    "granulation_amplitude": amp, "granulation_velocity_km_s": v_g,
                    "velocity_decay_height_km": h_v, "element_flux_density_G": flux, "element_field_G": b_el,
-                   "element_model": element_model, "positive_fraction": pos, "internetwork_field_G": in_v,
+                   "element_model": element_model, "element_depression": bool(element_depression),
+                   "canopy": bool(canopy), "positive_fraction": pos, "internetwork_field_G": in_v,
                    "internetwork_horizontal_field_G": in_h, "umbra_radius_km": r_u, "penumbra_radius_km": r_p,
                    "umbra_field_G": b_u, "penumbra_field_G": b_p, "umbra_model": umbra_model,
                    "evershed_speed_km_s": v_e, "moat_speed_km_s": v_m, "microturbulence_km_s": v_t},
