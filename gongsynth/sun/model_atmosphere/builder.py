@@ -383,6 +383,8 @@ def model_atmosphere(shape=(256, 256), pixel_size=96 * u.km, *, seed, nz=80,
     vz0 -= vz0.mean()
     vz0 *= v_g / (np.sqrt(np.sum(vz0 ** 2) / max(quiet.sum(), 1.0)) or 1.0)
     gx, gy = grid.gradient(grid.inverse_laplacian(vz0))
+    gx *= 1 - sp["mask"]          # the (non-local) granular outflow stops at the spot's edge
+    gy *= 1 - sp["mask"]
     vel = np.empty((3,) + temp.shape, dtype=np.float32)
     flows = np.exp(-np.maximum(zg, 0.0) / 150.0)          # Evershed/moat flows: strongest at tau = 1
     _flow(h, s, flows, vz0, gx, gy, sp["vx"], sp["vy"], vel)
