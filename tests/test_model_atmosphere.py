@@ -115,12 +115,18 @@ def test_periodic(quiet_box):
     (dict(positive_fraction=1.5), "positive_fraction"),
     (dict(umbra_model="z"), "umbra_model"),
     (dict(microturbulence=-1 * u.km / u.s), "microturbulence"),
+    (dict(shape=(512, 512), height_range=(-250, 700) * u.km), "height_range.*umbra_field"),
 ])
 def test_bad_input_names_the_argument(kwargs, match):
     args = dict(shape=(16, 16), seed=0)
     args.update(kwargs)
     with pytest.raises((ValueError, TypeError, u.UnitsError), match=match):
         model_atmosphere(**args)
+
+
+def test_shallow_grid_without_spot():
+    atm = model_atmosphere((16, 16), seed=0, nz=40, height_range=(-250, 600) * u.km)
+    assert not atm.meta["spot"] and atm.z.value[0] == -250
 
 
 def test_seed_is_required():

@@ -63,7 +63,7 @@ _GRANULES, _ELEMENTS, _INTERNETWORK, _SPOT = range(4)
 @functools.lru_cache(maxsize=8)
 def reference_stratifications(z_grid, granulation="brc", amplitude=1.0, element_model="network",
                               element_field=1500.0, umbra_model="maltby-m", umbra_field=3000.0,
-                              penumbra_field=1500.0, element_depression=True):
+                              penumbra_field=1500.0, element_depression=True, spot=True):
     """
     The 1-D components on the height grid (cached: they depend only on these arguments).
 
@@ -79,6 +79,8 @@ def reference_stratifications(z_grid, granulation="brc", amplitude=1.0, element_
         G at each model's own τ = 1 (for the pressure balance).
     element_depression : bool
         False (an ablation only): the element model is not sunk, its τ = 1 stays at z = 0.
+    spot : bool
+        Compute the umbra and penumbra (False: they are left out, zero arrays).
 
     Returns
     -------
@@ -112,11 +114,18 @@ def reference_stratifications(z_grid, granulation="brc", amplitude=1.0, element_
     mean_lnp = lnp_grid[0]
     out = dict(a=_A_TABLE.copy(), mean_t=t_grid[0], mean_lnp=mean_lnp, quiet_t=t_grid[1:],
                quiet_lnp=lnp_grid[1:], z_tau1_quiet=shift_q)
-    for i, (key, field) in enumerate((("tube", element_field), ("umbra", umbra_field),
-                                      ("penumbra", penumbra_field))):
+    for i, (key, field, arg) in enumerate((("tube", element_field, "element_field"),
+                                           ("umbra", umbra_field, "umbra_field"),
+                                           ("penumbra", penumbra_field, "penumbra_field"))):
         j = nq + i
+        if key != "tube" and not spot:
+            out[f"{key}_t"], out[f"{key}_lnp"], out[f"z_{key}"] = np.zeros(zg.size), np.zeros(zg.size), 0.0
+            continue
         p_tau1 = float(np.exp(np.interp(0.0, z[j], np.log(p[j]))))
-        depth = st.pressure_balance_depth(zg, mean_lnp, p_tau1, field)
+        try:
+            depth = st.pressure_balance_depth(zg, mean_lnp, p_tau1, field)
+        except ValueError as err:
+            raise ValueError(f"height_range: {err} (lower the bottom or reduce {arg})") from None
         if key == "tube" and not element_depression:
             depth = 0.0
         t_k, lnp_k = st.place_on_grid(zg, z[j:j + 1], t_all[j:j + 1], p[j:j + 1], depth)
@@ -344,7 +353,7 @@ def model_atmosphere(shape=(256, 256), pixel_size=96 * u.km, *, seed, nz=80,
 
     zg = np.linspace(z_lo, z_hi, int(nz))
     ref = reference_stratifications(tuple(zg), granulation_models, amp, element_model, b_el, umbra_model,
-                                    b_u, b_p, bool(element_depression))
+                                    b_u, b_p, bool(element_depression), has_spot)
     root = as_seed_sequence(seed)
     grid = PeriodicGrid(ny, nx, px)
     a, vpat, lanes = granulation_pattern(grid, stage_generator(root, "model_atmosphere", _GRANULES), gran)
