@@ -50,7 +50,7 @@ def power_law_fluxes(rng, total, lo=1e17, hi=1e19, index=1.85):
     Examples
     --------
     >>> f = power_law_fluxes(np.random.default_rng(0), 1e21)
-    >>> bool(f.min() >= 1e17 and f.max() <= 1e19), 0.7 < f.sum() / 1e21 < 1.3
+    >>> bool(f.min() >= 1e17 and f.max() <= 1e19), bool(0.7 < f.sum() / 1e21 < 1.3)
     (True, True)
     """
     a = 1.0 - index

@@ -75,7 +75,8 @@ def model_temperature(name, log_tau=LOG_TAU):
 
 def _kappa(t, p):
     s = solve_state(t, gas_pressure=p)
-    return continuum_opacity(500.0, t, s["electron_density"], s["hydrogen_density"]) / s["density"], s["density"]
+    kappa = continuum_opacity(500.0, t, s["electron_density"], s["hydrogen_density"])
+    return kappa / s["density"], s["density"]
 
 
 def tau_scale_family(temperature, log_tau=LOG_TAU, gravity=SOLAR_GRAVITY):
@@ -100,7 +101,7 @@ def tau_scale_family(temperature, log_tau=LOG_TAU, gravity=SOLAR_GRAVITY):
     --------
     >>> z, p, rho = tau_scale_family(model_temperature("hsra")[None])
     >>> bool(np.all(np.diff(z[0]) > 0)), f"{np.interp(0, z[0], np.log10(p[0])):.2f}"
-    (True, '5.07')
+    (True, '5.10')
     """
     t = np.atleast_2d(np.asarray(temperature, dtype=np.float64))
     lt = np.asarray(log_tau, dtype=np.float64)
@@ -132,7 +133,7 @@ def tau_scale_family(temperature, log_tau=LOG_TAU, gravity=SOLAR_GRAVITY):
 
 @functools.lru_cache(maxsize=1)
 def _mu_table():
-    """ln of the mean mass per particle ρkT/P on a (ln T, ln P) grid, from the equation of state."""
+    """Log of the mean mass per particle ρkT/P on a (ln T, ln P) grid, from the equation of state."""
     ln_t = np.linspace(np.log(1500.0), np.log(40000.0), 160)
     ln_p = np.linspace(np.log(1e-2), np.log(1e9), 120)
     tt, pp = np.meshgrid(np.exp(ln_t), np.exp(ln_p), indexing="ij")
