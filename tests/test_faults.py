@@ -338,6 +338,22 @@ def test_compare_figure_without_suffix_is_a_png_and_bad_suffixes_are_refused_fir
     assert _leftovers(tmp_path) == []
 
 
+def test_a_truncated_fits_file_is_named_and_called_truncated(tmp_path, capsys):
+    from gongsynth.geometry import field_centre
+    from gongsynth.products.maps import make_product_map
+
+    whole = tmp_path / "whole.fits"
+    noise = np.random.default_rng(3).normal(0, 3, (300, 300)) * u.G
+    make_product_map(noise, centre=field_centre(0 * u.deg)[0], scale=2.5 * u.arcsec,
+                     product="magnetogram").save(whole)
+    cut = tmp_path / "cut.fits"
+    cut.write_bytes(whole.read_bytes()[: whole.stat().st_size // 2])
+    assert main(["compare", str(whole), str(cut), "--out", str(tmp_path / "c.png")]) == 2
+    err = capsys.readouterr().err
+    assert f"{cut}: the image data cannot be read, the file is probably truncated" in err
+    assert not (tmp_path / "c.png").exists()
+
+
 def test_shape_zero_names_the_flag(capsys):
     with pytest.raises(SystemExit) as info:
         main(["simulate", "--shape", "0", "--out", "x"])

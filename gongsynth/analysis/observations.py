@@ -229,6 +229,8 @@ def _read_image(path, notes):
     """(data, header, quantisation step) of the first 2-D image HDU of a FITS file."""
     with warnings.catch_warnings(record=True) as caught:
         warnings.filterwarnings("always", category=VerifyWarning)
+        # A short file is reported below, by name, when its data cannot be read.
+        warnings.filterwarnings("ignore", message="File may have been truncated")
         try:
             hdul = fits.open(path, memmap=False)
         except (OSError, ValueError) as err:
@@ -243,7 +245,11 @@ def _read_image(path, notes):
                 raise ValueError(f"{path} holds no image HDU with at least two axes")
             # Quantisation step of integer data: astropy drops BSCALE once it scales the data.
             step = abs(float(image.header.get("BSCALE", 1.0))) if image.header.get("BITPIX", -32) > 0 else 0.0
-            data = np.asarray(image.data)
+            try:
+                data = np.asarray(image.data)
+            except (ValueError, OSError) as err:  # astropy's words for a file cut short: "cannot reshape"
+                raise ValueError(f"{path}: the image data cannot be read, the file is probably truncated "
+                                 f"(an incomplete download or copy): {err}") from None
             header = image.header.copy()
     for w in caught:
         if issubclass(w.category, VerifyWarning):
