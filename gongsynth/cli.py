@@ -140,6 +140,8 @@ def _simulation_config(args):
         changes["effects"] = dataclasses.replace(config.effects, **off)
     if args.shape is not None:
         changes["detector_shape"] = args.shape
+    if args.atmosphere is not None:
+        changes["atmosphere_file"] = str(args.atmosphere)
     if args.latitude and len(args.latitude) == 1:
         changes["latitude"] = args.latitude[0] * u.deg
     return config.replace(**changes)
@@ -149,10 +151,12 @@ def _run_simulate(args):
     from gongsynth.pipeline import simulate, simulate_many
     from gongsynth.products.output import check_output_folder
     from gongsynth.resources import check_disk_space, check_resources
+    from gongsynth.sun.atmosphere import Atmosphere
 
     config = _simulation_config(args)
     progress = not args.quiet
-    atmosphere = _read_atmosphere(args.atmosphere) if args.atmosphere else None
+    # Read once for all latitudes of a sweep (the config records the path).
+    atmosphere = Atmosphere.read(config.atmosphere_file) if config.atmosphere_file else None
     state = {"written": [], "saving": None}
     try:
         if args.latitude and len(args.latitude) > 1:
@@ -206,22 +210,6 @@ def _what_was_written(state):
     if pending is not None:
         text += f"{pending} was left as it was before this run (no partial set)"
     return text.rstrip("; ")
-
-
-def _read_atmosphere(path):
-    """The Atmosphere in ``path``, with the reader chosen by its form (folder, HDF5, 1-D model)."""
-    from gongsynth.sun.atmosphere import Atmosphere
-
-    if path.is_dir():
-        return Atmosphere.from_muram(path)
-    if not path.is_file():
-        raise FileNotFoundError(2, "no such file or folder", str(path))
-    if path.suffix.lower() in (".h5", ".hdf5"):
-        try:
-            return Atmosphere.from_file(path)
-        except (KeyError, ValueError):  # not gongsynth's layout: the ART/Bifrost one
-            return Atmosphere.from_art(path)
-    return Atmosphere.from_1d(path)
 
 
 def _sweep_folder(out, latitude):

@@ -64,6 +64,8 @@ _DOCS = {
     "photosphere_shape": "columns of the built-in Sun (ny, nx); unset: that Sun's default",
     "sun": "the built-in Sun: 'milne-eddington' (columns, fast) or 'model-atmosphere' (3-D, LTE transfer)",
     "workers": "threads for the frames engine (None: all cores)",
+    "atmosphere_file": "a model atmosphere as the input Sun (MURaM folder, HDF5 or 1-D model path; "
+                       "'<array>': passed in memory); unset: the built-in Sun",
     "flat_file": "a user-supplied flat: its FITS path, or '<array>' (unset: the synthetic flat)",
     "flat_sha256": "SHA-256 of that flat, checked when the run is repeated",
     "dark_file": "a user-supplied dark: its FITS path, or '<array>' (unset: the synthetic dark)",
@@ -293,6 +295,10 @@ class SimulationConfig:
     photosphere : dict
         Knobs of the built-in Sun that differ from its defaults
         (`photosphere_defaults` lists them all).
+    atmosphere_file : str or None
+        A model atmosphere as the input Sun instead of the built-in one: its
+        path (read by `gongsynth.Atmosphere.read`), or ``"<array>"`` when it
+        was passed to `gongsynth.simulate` in memory.
     flat_file, dark_file : str or None
         A user-supplied flat or dark: its FITS path, or ``"<array>"`` when it
         was passed as an array (None: the instrument's synthetic one).
@@ -324,6 +330,7 @@ class SimulationConfig:
     workers: int | None = None
     effects: Effects = field(default_factory=Effects)
     photosphere: dict = field(default_factory=dict)
+    atmosphere_file: str | None = None
     flat_file: str | None = None
     flat_sha256: str | None = None
     dark_file: str | None = None

@@ -18,6 +18,7 @@ from gongsynth.chain import build_chain
 from gongsynth.config import IN_MEMORY, Effects, SimulationConfig, fingerprint
 from gongsynth.optional import import_optional
 from gongsynth.resources import check_resources
+from gongsynth.sun.atmosphere import Atmosphere
 from gongsynth.version import version as __version__
 
 __all__ = ["SimulationResult", "Sweep", "simulate", "simulate_many"]
@@ -241,6 +242,7 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="bl
     elif _given(arguments):
         raise TypeError(f"pass either config or the run's arguments, not both: {sorted(_given(arguments))}")
     check_resources(config)
+    config, stokes = _input_atmosphere(config, stokes)
     config, flat = _detector_map(config, "flat", flat)
     config, dark = _detector_map(config, "dark", dark)
     chain = build_chain(config, stokes=stokes, flat=flat, dark=dark, progress=progress)
@@ -276,6 +278,23 @@ def _detector_map(config, name, given):
                          f"recorded ({recorded_file}, sha256 {recorded_sha[:12]}...)")
     path = str(given) if isinstance(given, (str, Path)) else IN_MEMORY
     return config.replace(**{f"{name}_file": path, f"{name}_sha256": digest}), given
+
+
+def _input_atmosphere(config, stokes):
+    """
+    The run's input Sun and its record: an atmosphere file named by the config is
+    read; an `Atmosphere` passed in memory is recorded as such, so that a rerun
+    from the saved config cannot silently fall back to the built-in Sun.
+    """
+    recorded = config.atmosphere_file
+    if stokes is None and recorded is not None:
+        if recorded == IN_MEMORY:
+            raise ValueError("this configuration's input Sun was an Atmosphere passed in memory "
+                             "(atmosphere_file = '<array>'): pass it again as simulate's first argument")
+        return config, Atmosphere.read(recorded)
+    if isinstance(stokes, Atmosphere) and recorded is None:
+        return config.replace(atmosphere_file=IN_MEMORY), stokes
+    return config, stokes
 
 
 def _given(arguments):

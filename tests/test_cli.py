@@ -102,7 +102,7 @@ def test_a_muram_snapshot_as_the_input_sun(tmp_path, capsys):
                  "--quiet", "--out", str(out)])
     assert code == 0
     saved = Config.from_toml(out / "config.toml")
-    assert saved.seed == 3
+    assert saved.seed == 3 and saved.atmosphere_file == str(muram)
     import sunpy.map
 
     magnetogram = sunpy.map.Map(out / "magnetogram.fits")
@@ -110,4 +110,9 @@ def test_a_muram_snapshot_as_the_input_sun(tmp_path, capsys):
     assert magnetogram.data.shape == (16, 16)
     # A quiet-Sun snapshot (net 10 G, |B| up to ~1 kG): finite maps and a truth within that range.
     assert np.isfinite(magnetogram.data).any() and np.nanmax(np.abs(truth.data)) < 1500
+    # The saved configuration alone repeats the run: the atmosphere is read from the recorded path.
+    config = str(out / "config.toml")
+    assert main(["simulate", "--config", config, "--quiet", "--out", str(tmp_path / "again")]) == 0
+    again = sunpy.map.Map(tmp_path / "again" / "magnetogram.fits")
+    assert np.array_equal(again.data, magnetogram.data, equal_nan=True)
     assert main(["simulate", "--atmosphere", str(tmp_path / "none.h5"), "--out", str(tmp_path / "x")]) == 2

@@ -332,3 +332,16 @@ def test_the_model_atmosphere_sun_goes_through_the_radiative_transfer():
     assert state["stokes"].mu == pytest.approx(0.5, abs=0.01)
     assert np.array_equal(state["stokes"].V.value, cube.V.value)
     assert np.array_equal(state["stokes"].blos.value, cube.blos.value)
+
+
+def test_an_atmosphere_passed_in_memory_is_recorded_and_required_to_repeat():
+    from gongsynth.sun.model_atmosphere import model_atmosphere
+
+    atm = model_atmosphere((32, 32), seed=2, spot=False, nz=40)
+    result = gongsynth.simulate(atm, detector_shape=16, resolutions=(1,), duration=1 * u.min, seed=5,
+                                progress=False)
+    assert result.config.atmosphere_file == "<array>"
+    with pytest.raises(ValueError, match="input Sun was an Atmosphere passed in memory"):
+        gongsynth.simulate(config=result.config, progress=False)
+    again = gongsynth.simulate(atm, config=result.config, progress=False)
+    assert np.array_equal(again.magnetogram.data, result.magnetogram.data, equal_nan=True)

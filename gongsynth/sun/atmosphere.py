@@ -10,6 +10,8 @@ float32 (a 1024² × 100 field takes 400 MiB); fields given as a scalar or a
 """
 from __future__ import annotations
 
+from pathlib import Path
+
 import astropy.units as u
 import numpy as np
 
@@ -193,6 +195,36 @@ class Atmosphere:
         `Atmosphere`
         """
         return cls._from_arrays(files.read_hdf5(path))
+
+    @classmethod
+    def read(cls, path):
+        """
+        Read an atmosphere with the reader its form calls for.
+
+        A folder is a MURaM snapshot (`from_muram`); ``.h5``/``.hdf5`` is
+        gongsynth's format (`from_file`) or else the ART/Bifrost layout
+        (`from_art`); anything else a 1-D model (`from_1d`: SIR ``.mod``,
+        Hazel ``.1d``, RH ``.atmos``).
+
+        Parameters
+        ----------
+        path : str or path-like
+
+        Returns
+        -------
+        `Atmosphere`
+        """
+        path = Path(path)
+        if path.is_dir():
+            return cls.from_muram(path)
+        if not path.is_file():
+            raise FileNotFoundError(2, "no such atmosphere file or folder", str(path))
+        if path.suffix.lower() in (".h5", ".hdf5"):
+            try:
+                return cls.from_file(path)
+            except (KeyError, ValueError):  # not gongsynth's layout: the ART/Bifrost one
+                return cls.from_art(path)
+        return cls.from_1d(path)
 
     def to_file(self, path, *, overwrite=False):
         """
