@@ -4,7 +4,7 @@ Input checks shared by every stage, with error messages that name the argument.
 import astropy.units as u
 import numpy as np
 
-__all__ = ["check_quantity", "check_wavelength_grid", "check_finite"]
+__all__ = ["check_quantity", "check_scalar", "check_wavelength_grid", "check_finite"]
 
 
 def check_quantity(value, unit, name, *, equivalencies=None):
@@ -54,6 +54,37 @@ def check_quantity(value, unit, name, *, equivalencies=None):
             f"{name} must have units convertible to {u.Unit(unit)}, got {value.unit}"
         )
     return value
+
+
+def check_scalar(value, unit, name, positive=True):
+    """
+    A finite scalar Quantity, positive (or non-negative), as a float in ``unit``.
+
+    Parameters
+    ----------
+    value : `~astropy.units.Quantity`
+    unit : `~astropy.units.Unit`
+    name : str
+        The argument's name, for the message.
+    positive : bool
+        Require > 0 (default); False: >= 0.
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> import astropy.units as u
+    >>> check_scalar(1.5 * u.Mm, u.km, "granule_size")
+    1500.0
+    """
+    check_quantity(value, unit, name)
+    bad_sign = value.value <= 0 if positive else value.value < 0
+    if np.ndim(value) != 0 or not np.isfinite(value.value) or bad_sign:
+        kind = "positive" if positive else "non-negative"
+        raise ValueError(f"{name} must be a {kind} finite scalar, got {value}")
+    return float(value.to_value(unit))
 
 
 def check_finite(array, name):

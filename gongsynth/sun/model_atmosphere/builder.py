@@ -45,7 +45,7 @@ from gongsynth.sun.model_atmosphere import stratification as st
 from gongsynth.sun.model_atmosphere.granulation import PeriodicGrid, anelastic_profile, granulation_pattern
 from gongsynth.sun.model_atmosphere.sunspot import spot_structure
 from gongsynth.sun.rt.eos import solve_state
-from gongsynth.validation import check_quantity
+from gongsynth.validation import check_quantity, check_scalar
 
 __all__ = ["model_atmosphere", "reference_stratifications", "GRANULATION_MODELS", "ELEMENT_MODELS",
            "UMBRA_MODELS"]
@@ -186,12 +186,6 @@ def _add_internetwork(c, dc, ax, ay, dazdx, dazdy, curl, mag):
                 mag[2, k, j, i] += c[k] * curl[j, i]
 
 
-def _scalar(q, unit, name, positive=True):
-    check_quantity(q, unit, name)
-    if np.ndim(q) != 0 or not np.isfinite(q.value) or (q.value <= 0 if positive else q.value < 0):
-        kind = "positive" if positive else "non-negative"
-        raise ValueError(f"{name} must be a {kind} finite scalar, got {q}")
-    return float(q.to_value(unit))
 
 
 def _choice(value, options, name):
@@ -307,7 +301,7 @@ def model_atmosphere(shape=(256, 256), pixel_size=96 * u.km, *, seed, nz=80,
     ny, nx = (int(n) for n in shape)
     if isinstance(nz, bool) or not isinstance(nz, (int, np.integer)) or nz < 16:
         raise ValueError(f"nz must be an int >= 16, got {nz!r}")
-    px = _scalar(pixel_size, u.km, "pixel_size")
+    px = check_scalar(pixel_size, u.km, "pixel_size")
     check_quantity(height_range, u.km, "height_range")
     if np.shape(height_range) != (2,):
         raise ValueError(f"height_range must be (bottom, top), got {height_range}")
@@ -320,25 +314,25 @@ def model_atmosphere(shape=(256, 256), pixel_size=96 * u.km, *, seed, nz=80,
             raise ValueError(f"{name} must be True or False, got {value!r}")
     if spot not in (True, False, "auto"):
         raise ValueError(f"spot must be True, False or 'auto', got {spot!r}")
-    gran = _scalar(granule_size, u.km, "granule_size")
+    gran = check_scalar(granule_size, u.km, "granule_size")
     _choice(granulation_models, GRANULATION_MODELS, "granulation_models")
     amp = _fraction(granulation_amplitude, "granulation_amplitude", 0.0, 3.0)
-    v_g = _scalar(granulation_velocity, u.km / u.s, "granulation_velocity", positive=False)
-    h_v = _scalar(velocity_decay_height, u.km, "velocity_decay_height")
-    flux = _scalar(element_flux_density, u.G, "element_flux_density", positive=False)
-    b_el = _scalar(element_field, u.G, "element_field")
+    v_g = check_scalar(granulation_velocity, u.km / u.s, "granulation_velocity", positive=False)
+    h_v = check_scalar(velocity_decay_height, u.km, "velocity_decay_height")
+    flux = check_scalar(element_flux_density, u.G, "element_flux_density", positive=False)
+    b_el = check_scalar(element_field, u.G, "element_field")
     _choice(element_model, ELEMENT_MODELS, "element_model")
     pos = _fraction(positive_fraction, "positive_fraction")
-    in_v = _scalar(internetwork_field, u.G, "internetwork_field", positive=False)
-    in_h = _scalar(internetwork_horizontal_field, u.G, "internetwork_horizontal_field", positive=False)
-    r_u = _scalar(umbra_radius, u.km, "umbra_radius")
-    r_p = _scalar(penumbra_radius, u.km, "penumbra_radius")
-    b_u = _scalar(umbra_field, u.G, "umbra_field")
-    b_p = _scalar(penumbra_field, u.G, "penumbra_field")
+    in_v = check_scalar(internetwork_field, u.G, "internetwork_field", positive=False)
+    in_h = check_scalar(internetwork_horizontal_field, u.G, "internetwork_horizontal_field", positive=False)
+    r_u = check_scalar(umbra_radius, u.km, "umbra_radius")
+    r_p = check_scalar(penumbra_radius, u.km, "penumbra_radius")
+    b_u = check_scalar(umbra_field, u.G, "umbra_field")
+    b_p = check_scalar(penumbra_field, u.G, "penumbra_field")
     _choice(umbra_model, UMBRA_MODELS, "umbra_model")
-    v_e = _scalar(evershed_speed, u.km / u.s, "evershed_speed", positive=False)
-    v_m = _scalar(moat_speed, u.km / u.s, "moat_speed", positive=False)
-    v_t = _scalar(microturbulence, u.km / u.s, "microturbulence", positive=False)
+    v_e = check_scalar(evershed_speed, u.km / u.s, "evershed_speed", positive=False)
+    v_m = check_scalar(moat_speed, u.km / u.s, "moat_speed", positive=False)
+    v_t = check_scalar(microturbulence, u.km / u.s, "microturbulence", positive=False)
     for name, value in (("element_field", b_el), ("umbra_field", b_u), ("penumbra_field", b_p)):
         if value > 6000:
             raise ValueError(f"{name} must be <= 6000 G, got {value} G")

@@ -47,7 +47,7 @@ from scipy.spatial import cKDTree
 
 from gongsynth.seeding import as_seed_sequence, stage_generator
 from gongsynth.sun.photosphere.columns import Photosphere
-from gongsynth.validation import check_quantity
+from gongsynth.validation import check_scalar
 
 __all__ = ["model_photosphere"]
 
@@ -261,12 +261,6 @@ def _block_mean(a, k):
     return a.reshape(ny // k, k, nx // k, k).mean(axis=(1, 3))
 
 
-def _scalar(q, unit, name, positive=True):
-    check_quantity(q, unit, name)
-    if np.ndim(q) != 0 or not np.isfinite(q.value) or (q.value <= 0 if positive else q.value < 0):
-        kind = "positive" if positive else "non-negative"
-        raise ValueError(f"{name} must be a {kind} finite scalar, got {q}")
-    return float(q.to_value(unit))
 
 
 def _fraction(value, name):
@@ -359,22 +353,22 @@ def model_photosphere(*, shape=(1024, 1024), pixel_size=96 * u.km, seed=0, spot=
             or not all(isinstance(n, (int, np.integer)) and n >= 8 for n in shape)):
         raise ValueError(f"shape must be two ints >= 8 (ny, nx), got {shape!r}")
     ny, nx = (int(n) for n in shape)
-    px = _scalar(pixel_size, u.km, "pixel_size")
-    r_u = _scalar(umbra_radius, u.km, "umbra_radius")
-    r_p = _scalar(penumbra_radius, u.km, "penumbra_radius")
-    b_u = _scalar(umbra_field, u.G, "umbra_field")
-    b_p = _scalar(penumbra_field, u.G, "penumbra_field")
-    v_e = _scalar(evershed_speed, u.km / u.s, "evershed_speed", positive=False)
-    v_m = _scalar(moat_speed, u.km / u.s, "moat_speed", positive=False)
-    gran = _scalar(granule_size, u.km, "granule_size")
-    v_g = _scalar(granulation_velocity, u.km / u.s, "granulation_velocity", positive=False)
-    v_h = _scalar(horizontal_velocity, u.km / u.s, "horizontal_velocity", positive=False)
-    sg = _scalar(supergranule_size, u.km, "supergranule_size")
-    net = _scalar(network_flux_density, u.G, "network_flux_density", positive=False)
-    plage_b = _scalar(plage_flux_density, u.G, "plage_flux_density", positive=False)
-    b_el = _scalar(element_field, u.G, "element_field")
-    in_v = _scalar(internetwork_field, u.G, "internetwork_field", positive=False)
-    in_h = _scalar(internetwork_horizontal_field, u.G, "internetwork_horizontal_field", positive=False)
+    px = check_scalar(pixel_size, u.km, "pixel_size")
+    r_u = check_scalar(umbra_radius, u.km, "umbra_radius")
+    r_p = check_scalar(penumbra_radius, u.km, "penumbra_radius")
+    b_u = check_scalar(umbra_field, u.G, "umbra_field")
+    b_p = check_scalar(penumbra_field, u.G, "penumbra_field")
+    v_e = check_scalar(evershed_speed, u.km / u.s, "evershed_speed", positive=False)
+    v_m = check_scalar(moat_speed, u.km / u.s, "moat_speed", positive=False)
+    gran = check_scalar(granule_size, u.km, "granule_size")
+    v_g = check_scalar(granulation_velocity, u.km / u.s, "granulation_velocity", positive=False)
+    v_h = check_scalar(horizontal_velocity, u.km / u.s, "horizontal_velocity", positive=False)
+    sg = check_scalar(supergranule_size, u.km, "supergranule_size")
+    net = check_scalar(network_flux_density, u.G, "network_flux_density", positive=False)
+    plage_b = check_scalar(plage_flux_density, u.G, "plage_flux_density", positive=False)
+    b_el = check_scalar(element_field, u.G, "element_field")
+    in_v = check_scalar(internetwork_field, u.G, "internetwork_field", positive=False)
+    in_h = check_scalar(internetwork_horizontal_field, u.G, "internetwork_horizontal_field", positive=False)
     i_u = _fraction(umbra_continuum, "umbra_continuum")
     i_p = _fraction(penumbra_continuum, "penumbra_continuum")
     contrast = _fraction(granulation_contrast, "granulation_contrast")
