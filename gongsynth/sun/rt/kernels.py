@@ -28,8 +28,10 @@ import math
 
 import numba as nb
 import numpy as np
+from scipy.special import wofz
 
-__all__ = ["faddeeva", "solve_columns", "TAU_BOTTOM", "TAU_TOP", "ZEEMAN_CM_PER_G"]
+__all__ = ["faddeeva", "faddeeva_fast", "solve_columns", "solve_columns_reference", "TAU_BOTTOM", "TAU_TOP",
+           "ZEEMAN_CM_PER_G"]
 
 #: Continuum optical depth (along the ray) where the integration starts.
 TAU_BOTTOM = 60.0
@@ -146,10 +148,14 @@ def _solve4(q, u, v, rq, ru, rv, al, b0, b1, b2, b3):
 
 
 @nb.njit(parallel=True, cache=True)
-def solve_columns(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all, damp_all, src_all, vlos,
+def solve_columns_reference(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all, damp_all, src_all, vlos,
                   bpar, b1, b2, out_i, out_q, out_u, out_v, log_tau_c, log_tau_core):
     """
-    Emergent Stokes spectra of a block of rays.
+    Emergent Stokes spectra of a block of rays: the simple reference path of `solve_columns`.
+
+    The first version of the solver, kept to check the fast one against: wavelength
+    by wavelength, Humlíček's W4 for the π and both σ components at every point,
+    the full 4 × 4 solve even where B = 0.  Same arguments as `solve_columns`.
 
     Parameters
     ----------
@@ -264,3 +270,297 @@ def solve_columns(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all
                     tau += 0.5 * (ec[0] + en[0]) * ds[k]
                     log_tau_core[p, k] = math.log10(max(tau, 1e-12))
                     en = ec
+
+
+# The fast path: a tabulated Faddeeva function, depth-outer loops, the scalar solve where B = 0.
+_WT_STEP = 0.2
+_WT_ORDER = 6
+_WT_YMAX = 2.0
+
+
+def _faddeeva_table():
+    """Taylor coefficients w⁽ⁿ⁾(z₀)/n! at z₀ = x₀ + i y₀, x₀ = 0..5.6, y₀ = 0..2 (step 0.2), as (re, im)."""
+    xs = np.arange(29) * _WT_STEP
+    ys = np.arange(11) * _WT_STEP
+    z0 = xs[None, :] + 1j * ys[:, None]
+    w = wofz(z0)
+    der = [w, -2.0 * z0 * w + 2j / math.sqrt(math.pi)]          # w' = -2 z w + 2i/√π
+    for n in range(1, _WT_ORDER):
+        der.append(-2.0 * z0 * der[n] - 2.0 * n * der[n - 1])   # w⁽ⁿ⁺¹⁾ = -2 z w⁽ⁿ⁾ - 2n w⁽ⁿ⁻¹⁾
+    c = np.stack([der[n] / math.factorial(n) for n in range(_WT_ORDER + 1)], axis=-1)
+    return np.ascontiguousarray(np.stack([c.real, c.imag], axis=-1))
+
+
+_WT = _faddeeva_table()
+
+
+@nb.njit(cache=True, inline="always")
+def faddeeva_fast(x, y):
+    """
+    Re and Im of w(x + i y), y ≥ 0: Humlíček's W4 where |x| + y ≥ 5.5, else a Taylor table.
+
+    Where |x| + y < 5.5 and y ≤ 2 (Humlíček's costly regions 3 and 4) w is the
+    6th-order Taylor polynomial about the nearest node of a 0.2-step grid whose
+    coefficients come from `scipy.special.wofz` (error < 1e-7 of w(i y)); with
+    y > 2 there W4's region 3.  Elsewhere identical to `faddeeva`.
+
+    Parameters
+    ----------
+    x, y : float
+        Real and imaginary parts of the argument (y ≥ 0).
+
+    Returns
+    -------
+    tuple of float
+        Re w (the Voigt function H) and Im w (the Faraday–Voigt function, 2F).
+
+    Examples
+    --------
+    >>> h, f = faddeeva_fast(0.0, 0.05)
+    >>> round(h, 6)
+    0.945343
+    """
+    s = abs(x) + y
+    if s >= 15.0:
+        t = complex(y, -x)
+        w = t * 0.5641896 / (0.5 + t * t)
+        return w.real, w.imag
+    if s >= 5.5:
+        t = complex(y, -x)
+        u = t * t
+        w = t * (1.410474 + u * 0.5641896) / (0.75 + u * (3.0 + u))
+        return w.real, w.imag
+    if y <= _WT_YMAX:
+        ax = abs(x)
+        ix = int(ax * (1.0 / _WT_STEP) + 0.5)
+        iy = int(y * (1.0 / _WT_STEP) + 0.5)
+        dx = ax - ix * _WT_STEP
+        dy = y - iy * _WT_STEP
+        wr = _WT[iy, ix, _WT_ORDER, 0]
+        wi = _WT[iy, ix, _WT_ORDER, 1]
+        for n in range(_WT_ORDER - 1, -1, -1):
+            wr, wi = wr * dx - wi * dy + _WT[iy, ix, n, 0], wr * dy + wi * dx + _WT[iy, ix, n, 1]
+        return wr, (wi if x >= 0.0 else -wi)
+    t = complex(y, -x)
+    w = ((16.4955 + t * (20.20933 + t * (11.96482 + t * (3.778987 + t * 0.5642236))))
+         / (16.4955 + t * (38.82363 + t * (39.27121 + t * (21.69274 + t * (6.699398 + t))))))
+    return w.real, w.imag
+
+
+@nb.njit(cache=True, inline="always")
+def _fast_elements(v, a, vb, kc, h, c1, c2, cq, cu, cv):
+    """(η_I, η_Q/η_I, η_U/η_I, η_V/η_I, ρ_Q/η_I, ρ_U/η_I, ρ_V/η_I); h = κ_L/2, c1,2 = 1 ∓ cos²γ, cv = cos γ."""
+    hp, fp = faddeeva_fast(v, a)
+    if vb == 0.0:
+        return kc + h * (hp * c1 + hp * c2), 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    hb, fb = faddeeva_fast(v + vb, a)
+    hr, fr = faddeeva_fast(v - vb, a)
+    hs = 0.5 * (hb + hr)
+    fs = 0.5 * (fb + fr)
+    ei = kc + h * (hp * c1 + hs * c2)
+    g = h / ei
+    t = g * (hp - hs)
+    r = g * (fp - fs)
+    return ei, t * cq, t * cu, g * (hr - hb) * cv, r * cq, r * cu, g * (fr - fb) * cv
+
+
+@nb.njit(cache=True, inline="always")
+def _weights(dt, ex):
+    """`_delo_weights` with exp(-dt) given (branch-free for vectorisation)."""
+    w0s = dt * (1.0 - dt * (0.5 - dt / 6.0))
+    w1s = dt * dt * (0.5 - dt * (1.0 / 3.0 - dt * 0.125))
+    small = dt < 1e-3
+    e = 1.0 - w0s if small else ex
+    w0 = w0s if small else 1.0 - ex
+    w1 = w1s if small else w0 - dt * ex
+    beta = w1 / dt
+    return e, w0 - beta, beta
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _step(i0, i1, i2, i3, eu, ec, dt, ex, bu, bc):
+    """One DELO-linear step of all wavelengths (4 × 4 solve; a loop the compiler vectorises)."""
+    for j in range(i0.size):
+        e, al, be = _weights(dt[j], ex[j])
+        a0, a1, a2, a3 = i0[j], i1[j], i2[j], i3[j]
+        u1, u2, u3, u4, u5, u6 = eu[1, j], eu[2, j], eu[3, j], eu[4, j], eu[5, j], eu[6, j]
+        y0 = e * a0 - be * (u1 * a1 + u2 * a2 + u3 * a3) + al * bc + be * bu
+        y1 = e * a1 - be * (u1 * a0 + u6 * a2 - u5 * a3) + al * bc * ec[1, j] + be * bu * u1
+        y2 = e * a2 - be * (u2 * a0 - u6 * a1 + u4 * a3) + al * bc * ec[2, j] + be * bu * u2
+        y3 = e * a3 - be * (u3 * a0 + u5 * a1 - u4 * a2) + al * bc * ec[3, j] + be * bu * u3
+        i0[j], i1[j], i2[j], i3[j] = _solve4(ec[1, j], ec[2, j], ec[3, j], ec[4, j], ec[5, j], ec[6, j], al,
+                                             y0, y1, y2, y3)
+
+
+@nb.njit(parallel=True, cache=True, error_model="numpy")
+def solve_columns(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all, damp_all, src_all, vlos,
+                  bpar, b1, b2, out_i, out_q, out_u, out_v, log_tau_c, log_tau_core):
+    """
+    Emergent Stokes spectra of a block of rays.
+
+    The DELO-linear solution of the module docstring over the same points as
+    `solve_columns_reference`, computed faster: all wavelengths are advanced
+    together point by point (independent work for the processor between the
+    steps of one recursion), the Faddeeva function is `faddeeva_fast`, and a ray
+    with B = 0 at every integrated point takes the scalar solve (Q = U = V = 0
+    exactly; I as the 4 × 4 solve gives it with zero off-diagonal elements).
+    Each ray's result depends on that ray's data only (any block size, any threads).
+
+    Parameters
+    ----------
+    lam_cm : (nλ,) float64
+        Wavelengths (cm, the line's rest wavelength scale).
+    lam0 : float
+        Rest wavelength (cm).
+    lande_g : float
+        Effective Landé factor of the normal triplet.
+    core_index : int
+        Wavelength index whose optical depth is reported in ``log_tau_core``.
+    ds : (nz - 1,) float64
+        Path length between consecutive ray points (cm), bottom to top.
+    kc_all, kl_all, dop_all, damp_all, src_all : (ncol, nz) float64
+        Continuum opacity and line-centre opacity scale (cm⁻¹), Doppler width
+        (cm), damping and source function (see
+        `~gongsynth.sun.rt.opacity.column_opacity`); points ordered bottom to top.
+    vlos, bpar, b1, b2 : (ncol, nz) float64
+        Velocity along the ray (cm/s, > 0 away from the observer) and the field
+        along the line of sight and the sky axes e1, e2 (G).
+    out_i, out_q, out_u, out_v : (ncol, nλ) float32
+        Filled with the emergent spectra (units of the source function).
+    log_tau_c, log_tau_core : (ncol, nz) float32
+        Filled with log10 of the continuum and ``core_index`` optical depth along the ray.
+    """
+    ncol, nz = kc_all.shape
+    nl = lam_cm.size
+    dl = lam_cm - lam0
+    for p in nb.prange(ncol):
+        kc = kc_all[p]
+        kl = kl_all[p]
+        aa = damp_all[p]
+        bb = src_all[p]
+        pt = np.empty((9, nz))        # 1/Δλ_D, v_los, v_B, κ_L/2, 1 - cos²γ, 1 + cos²γ, cos 2χ, sin 2χ, cos γ
+        kmax = np.empty(nz)
+        magnetic = np.zeros(nz, dtype=np.bool_)
+        for k in range(nz):
+            dop = dop_all[p, k]
+            kmax[k] = kc[k] + kl[k]
+            pt[0, k] = 1.0 / dop
+            pt[1, k] = lam0 * vlos[p, k] / _C / dop
+            pt[3, k] = 0.5 * kl[k]
+            bz, bx, by = bpar[p, k], b1[p, k], b2[p, k]
+            b2sum = bz * bz + bx * bx + by * by
+            cg = 1.0
+            pt[2, k] = pt[6, k] = pt[7, k] = 0.0
+            if b2sum > 0.0:
+                magnetic[k] = True
+                pt[2, k] = ZEEMAN_CM_PER_G * lam0 * lam0 * lande_g * math.sqrt(b2sum) / dop
+                cg = bz / math.sqrt(b2sum)
+                pt[6, k] = (bx * bx - by * by) / b2sum
+                pt[7, k] = 2.0 * bx * by / b2sum
+            pt[4, k] = 1.0 - cg * cg
+            pt[5, k] = 1.0 + cg * cg
+            pt[8, k] = cg
+        tc = 0.0
+        tm = 0.0
+        log_tau_c[p, nz - 1] = -12.0
+        kbot = 0
+        ktop = nz - 1
+        for k in range(nz - 2, -1, -1):
+            tc += 0.5 * (kc[k] + kc[k + 1]) * ds[k]
+            tm += 0.5 * (kmax[k] + kmax[k + 1]) * ds[k]
+            log_tau_c[p, k] = math.log10(max(tc, 1e-12))
+            if tm <= TAU_TOP:
+                ktop = k
+            if tc < TAU_BOTTOM:
+                kbot = k
+        kbot = max(kbot - 1, 0)
+        ktop = max(ktop, kbot + 1)
+        polar = magnetic[kbot:ktop + 1].any()
+        wk = np.zeros((12, nl))
+        i0, i1, i2, i3, pr0, pr1, pr2, pr3, pr4, pr5, dt, ex = (wk[0], wk[1], wk[2], wk[3], wk[4], wk[5], wk[6],
+                                                                wk[7], wk[8], wk[9], wk[10], wk[11])
+        eu = np.empty((7, nl))        # elements at the point below
+        ec = np.empty((7, nl))        # and at the current point
+        k = kbot
+        for j in range(nl):
+            e1 = _fast_elements(dl[j] * pt[0, k] - pt[1, k], aa[k], pt[2, k], kc[k], pt[3, k], pt[4, k],
+                                pt[5, k], pt[6, k], pt[7, k], pt[8, k])
+            en = _fast_elements(dl[j] * pt[0, k + 1] - pt[1, k + 1], aa[k + 1], pt[2, k + 1], kc[k + 1],
+                                pt[3, k + 1], pt[4, k + 1], pt[5, k + 1], pt[6, k + 1], pt[7, k + 1],
+                                pt[8, k + 1])
+            i0[j] = bb[k] + (bb[k] - bb[k + 1]) / (0.5 * (e1[0] + en[0]) * ds[k])
+            eu[0, j], eu[1, j], eu[2, j], eu[3, j], eu[4, j], eu[5, j], eu[6, j] = e1
+        for k in range(kbot + 1, ktop + 1):
+            dsk = ds[k - 1]
+            bu = bb[k - 1]
+            bc = bb[k]
+            rd, vs, vb, h, c1, c2 = pt[0, k], pt[1, k], pt[2, k], pt[3, k], pt[4, k], pt[5, k]
+            ak = aa[k]
+            if not polar:
+                for j in range(nl):
+                    hp, fp = faddeeva_fast(dl[j] * rd - vs, ak)
+                    pr0[j] = hp
+                for j in range(nl):
+                    ei = kc[k] + h * (pr0[j] * c1 + pr0[j] * c2)
+                    dt[j] = 0.5 * (eu[0, j] + ei) * dsk
+                    eu[0, j] = ei
+                for j in range(nl):
+                    ex[j] = math.exp(-dt[j])
+                for j in range(nl):
+                    e, al, be = _weights(dt[j], ex[j])
+                    i0[j] = e * i0[j] + al * bc + be * bu
+                continue
+            cq, cu, cv = pt[6, k], pt[7, k], pt[8, k]
+            for j in range(nl):
+                v = dl[j] * rd - vs
+                hp, fp = faddeeva_fast(v, ak)
+                pr0[j] = hp
+                pr1[j] = fp
+                if vb == 0.0:
+                    pr2[j] = hp
+                    pr3[j] = fp
+                    pr4[j] = 0.0
+                    pr5[j] = 0.0
+                else:
+                    hb, fb = faddeeva_fast(v + vb, ak)
+                    hr, fr = faddeeva_fast(v - vb, ak)
+                    pr2[j] = 0.5 * (hb + hr)
+                    pr3[j] = 0.5 * (fb + fr)
+                    pr4[j] = hr - hb
+                    pr5[j] = fr - fb
+            kck = kc[k]
+            for j in range(nl):
+                ei = kck + h * (pr0[j] * c1 + pr2[j] * c2)
+                g = h / ei
+                t = g * (pr0[j] - pr2[j])
+                r = g * (pr1[j] - pr3[j])
+                ec[0, j] = ei
+                ec[1, j] = t * cq
+                ec[2, j] = t * cu
+                ec[3, j] = g * pr4[j] * cv
+                ec[4, j] = r * cq
+                ec[5, j] = r * cu
+                ec[6, j] = g * pr5[j] * cv
+                dt[j] = 0.5 * (eu[0, j] + ei) * dsk
+            for j in range(nl):
+                ex[j] = math.exp(-dt[j])
+            _step(i0, i1, i2, i3, eu, ec, dt, ex, bu, bc)
+            eu, ec = ec, eu
+        for j in range(nl):
+            out_i[p, j] = i0[j]
+            out_q[p, j] = i1[j]
+            out_u[p, j] = i2[j]
+            out_v[p, j] = i3[j]
+        # Optical depth at the core wavelength along the whole ray.
+        j = core_index
+        tau = 0.0
+        log_tau_core[p, nz - 1] = -12.0
+        k = nz - 1
+        en0 = _fast_elements(dl[j] * pt[0, k] - pt[1, k], aa[k], pt[2, k], kc[k], pt[3, k], pt[4, k], pt[5, k],
+                             pt[6, k], pt[7, k], pt[8, k])[0]
+        for k in range(nz - 2, -1, -1):
+            ec0 = _fast_elements(dl[j] * pt[0, k] - pt[1, k], aa[k], pt[2, k], kc[k], pt[3, k], pt[4, k],
+                                 pt[5, k], pt[6, k], pt[7, k], pt[8, k])[0]
+            tau += 0.5 * (ec0 + en0) * ds[k]
+            log_tau_core[p, k] = math.log10(max(tau, 1e-12))
+            en0 = ec0
