@@ -31,12 +31,14 @@ import numpy as np
 from scipy.special import wofz
 
 __all__ = ["faddeeva", "faddeeva_fast", "solve_columns", "solve_columns_reference", "TAU_BOTTOM", "TAU_TOP",
-           "ZEEMAN_CM_PER_G"]
+           "VB_TAYLOR", "ZEEMAN_CM_PER_G"]
 
 #: Continuum optical depth (along the ray) where the integration starts.
 TAU_BOTTOM = 60.0
 #: Largest optical depth (any wavelength) of the layers above the ray's top point that are left out.
 TAU_TOP = 1e-6
+#: Zeeman splitting (Doppler widths) up to which the σ profiles come from the Taylor series about π's.
+VB_TAYLOR = 0.1
 #: e / (4π m_e c²), cm⁻¹ G⁻¹: Δλ_B = this × λ² g B.
 ZEEMAN_CM_PER_G = 4.66864e-5
 _C = 2.99792458e10
@@ -276,11 +278,12 @@ def solve_columns_reference(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_al
 _WT_STEP = 0.2
 _WT_ORDER = 6
 _WT_YMAX = 2.0
+_WT_NX = 29
 
 
 def _faddeeva_table():
     """Taylor coefficients w⁽ⁿ⁾(z₀)/n! at z₀ = x₀ + i y₀, x₀ = 0..5.6, y₀ = 0..2 (step 0.2), as (re, im)."""
-    xs = np.arange(29) * _WT_STEP
+    xs = np.arange(_WT_NX) * _WT_STEP
     ys = np.arange(11) * _WT_STEP
     z0 = xs[None, :] + 1j * ys[:, None]
     w = wofz(z0)
@@ -336,10 +339,15 @@ def faddeeva_fast(x, y):
         iy = int(y * (1.0 / _WT_STEP) + 0.5)
         dx = ax - ix * _WT_STEP
         dy = y - iy * _WT_STEP
-        wr = _WT[iy, ix, _WT_ORDER, 0]
-        wi = _WT[iy, ix, _WT_ORDER, 1]
-        for n in range(_WT_ORDER - 1, -1, -1):
-            wr, wi = wr * dx - wi * dy + _WT[iy, ix, n, 0], wr * dy + wi * dx + _WT[iy, ix, n, 1]
+        c = _WT[iy, ix]
+        wr = c[6, 0]
+        wi = c[6, 1]
+        wr, wi = wr * dx - wi * dy + c[5, 0], wr * dy + wi * dx + c[5, 1]
+        wr, wi = wr * dx - wi * dy + c[4, 0], wr * dy + wi * dx + c[4, 1]
+        wr, wi = wr * dx - wi * dy + c[3, 0], wr * dy + wi * dx + c[3, 1]
+        wr, wi = wr * dx - wi * dy + c[2, 0], wr * dy + wi * dx + c[2, 1]
+        wr, wi = wr * dx - wi * dy + c[1, 0], wr * dy + wi * dx + c[1, 1]
+        wr, wi = wr * dx - wi * dy + c[0, 0], wr * dy + wi * dx + c[0, 1]
         return wr, (wi if x >= 0.0 else -wi)
     t = complex(y, -x)
     w = ((16.4955 + t * (20.20933 + t * (11.96482 + t * (3.778987 + t * 0.5642236))))
@@ -362,6 +370,95 @@ def _fast_elements(v, a, vb, kc, h, c1, c2, cq, cu, cv):
     t = g * (hp - hs)
     r = g * (fp - fs)
     return ei, t * cq, t * cu, g * (hr - hb) * cv, r * cq, r * cu, g * (fr - fb) * cv
+
+
+@nb.njit(cache=True, inline="always")
+def _sigma_taylor(x, y, vb, wr, wi):
+    """
+    σ components from w(z) = wr + i wi by the Taylor series in ±vb (z = x + i y, |vb| ≤ `VB_TAYLOR`).
+
+    Returns Re and Im of [w(z + vb) + w(z − vb)]/2 and of w(z − vb) − w(z + vb), with
+    w⁽ⁿ⁾ from w' = −2 z w + 2i/√π, w⁽ⁿ⁺¹⁾ = −2 z w⁽ⁿ⁾ − 2 n w⁽ⁿ⁻¹⁾ (terms up to vb⁷).
+    """
+    zr = -2.0 * x
+    zi = -2.0 * y
+    d0r, d0i = wr, wi
+    d1r = zr * d0r - zi * d0i
+    d1i = zr * d0i + zi * d0r + 1.1283791670955126
+    er, ei_, odr, odi = d0r, d0i, vb * d1r, vb * d1i
+    c = vb
+    for n in range(1, 7):
+        d2r = zr * d1r - zi * d1i - 2.0 * n * d0r
+        d2i = zr * d1i + zi * d1r - 2.0 * n * d0i
+        c *= vb / (n + 1)
+        if n % 2 == 1:
+            er += c * d2r
+            ei_ += c * d2i
+        else:
+            odr += c * d2r
+            odi += c * d2i
+        d0r, d0i, d1r, d1i = d1r, d1i, d2r, d2i
+    return er, ei_, -2.0 * odr, -2.0 * odi
+
+
+@nb.njit(cache=True, inline="always")
+def _w_rational(x, y):
+    """Humlíček's W4 regions 1 (|x| + y ≥ 15) and 2 in real arithmetic, branch-free (for |x| + y ≥ 5.5)."""
+    ur = y * y - x * x                   # u = t², t = y − i x
+    ui = -2.0 * x * y
+    dr = 0.5 + ur
+    q = 0.5641896 / (dr * dr + ui * ui)
+    r1r = q * (y * dr - x * ui)
+    r1i = q * (-y * ui - x * dr)
+    nr = 1.410474 + 0.5641896 * ur
+    ni = 0.5641896 * ui
+    pr = y * nr + x * ni
+    pi_ = y * ni - x * nr
+    er = 3.0 + ur
+    dr2 = 0.75 + ur * er - ui * ui
+    di2 = ur * ui + ui * er
+    q2 = 1.0 / (dr2 * dr2 + di2 * di2)
+    far = abs(x) + y >= 15.0
+    return (r1r if far else q2 * (pr * dr2 + pi_ * di2)), (r1i if far else q2 * (pi_ * dr2 - pr * di2))
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _profiles_vec(dl, rd, vs, y, vb, hp, fp, hs, fs, hd, fd):
+    """
+    π and σ profiles of all wavelengths at one point with y ≤ 2, vb ≤ `VB_TAYLOR` (a vectorised loop).
+
+    Where |x| + y < 5.5: w(z) from the table and the σ components by `_sigma_taylor`;
+    elsewhere W4's rational regions at z and z ± vb.
+    """
+    for j in range(dl.size):
+        x = dl[j] * rd - vs
+        ax = abs(x)
+        ix = min(int(ax * (1.0 / _WT_STEP) + 0.5), _WT_NX - 1)
+        iy = int(y * (1.0 / _WT_STEP) + 0.5)
+        dx = ax - ix * _WT_STEP
+        dy = y - iy * _WT_STEP
+        wr = _WT[iy, ix, 6, 0]
+        wi = _WT[iy, ix, 6, 1]
+        wr, wi = wr * dx - wi * dy + _WT[iy, ix, 5, 0], wr * dy + wi * dx + _WT[iy, ix, 5, 1]
+        wr, wi = wr * dx - wi * dy + _WT[iy, ix, 4, 0], wr * dy + wi * dx + _WT[iy, ix, 4, 1]
+        wr, wi = wr * dx - wi * dy + _WT[iy, ix, 3, 0], wr * dy + wi * dx + _WT[iy, ix, 3, 1]
+        wr, wi = wr * dx - wi * dy + _WT[iy, ix, 2, 0], wr * dy + wi * dx + _WT[iy, ix, 2, 1]
+        wr, wi = wr * dx - wi * dy + _WT[iy, ix, 1, 0], wr * dy + wi * dx + _WT[iy, ix, 1, 1]
+        wr, wi = wr * dx - wi * dy + _WT[iy, ix, 0, 0], wr * dy + wi * dx + _WT[iy, ix, 0, 1]
+        wi = wi if x >= 0.0 else -wi
+        rr, ri = _w_rational(x, y)
+        br, bi = _w_rational(x + vb, y)
+        qr, qi = _w_rational(x - vb, y)
+        core = ax + y < 5.5
+        hr = wr if core else rr
+        fr = wi if core else ri
+        sr, si, tr, ti = _sigma_taylor(x, y, vb, hr, fr)
+        hp[j] = hr
+        fp[j] = fr
+        hs[j] = sr if core else 0.5 * (br + qr)
+        fs[j] = si if core else 0.5 * (bi + qi)
+        hd[j] = tr if core else qr - br
+        fd[j] = ti if core else qi - bi
 
 
 @nb.njit(cache=True, inline="always")
@@ -497,9 +594,11 @@ def solve_columns(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all
             rd, vs, vb, h, c1, c2 = pt[0, k], pt[1, k], pt[2, k], pt[3, k], pt[4, k], pt[5, k]
             ak = aa[k]
             if not polar:
-                for j in range(nl):
-                    hp, fp = faddeeva_fast(dl[j] * rd - vs, ak)
-                    pr0[j] = hp
+                if ak <= _WT_YMAX:
+                    _profiles_vec(dl, rd, vs, ak, 0.0, pr0, pr1, pr2, pr3, pr4, pr5)
+                else:
+                    for j in range(nl):
+                        pr0[j] = faddeeva_fast(dl[j] * rd - vs, ak)[0]
                 for j in range(nl):
                     ei = kc[k] + h * (pr0[j] * c1 + pr0[j] * c2)
                     dt[j] = 0.5 * (eu[0, j] + ei) * dsk
@@ -511,7 +610,9 @@ def solve_columns(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all
                     i0[j] = e * i0[j] + al * bc + be * bu
                 continue
             cq, cu, cv = pt[6, k], pt[7, k], pt[8, k]
-            for j in range(nl):
+            if vb <= VB_TAYLOR and ak <= _WT_YMAX:
+                _profiles_vec(dl, rd, vs, ak, vb, pr0, pr1, pr2, pr3, pr4, pr5)
+            for j in range(nl if vb > VB_TAYLOR or ak > _WT_YMAX else 0):
                 v = dl[j] * rd - vs
                 hp, fp = faddeeva_fast(v, ak)
                 pr0[j] = hp
@@ -521,6 +622,8 @@ def solve_columns(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all
                     pr3[j] = fp
                     pr4[j] = 0.0
                     pr5[j] = 0.0
+                elif vb <= VB_TAYLOR and abs(v) + ak < 5.5 and ak <= _WT_YMAX:
+                    pr2[j], pr3[j], pr4[j], pr5[j] = _sigma_taylor(v, ak, vb, hp, fp)
                 else:
                     hb, fb = faddeeva_fast(v + vb, ak)
                     hr, fr = faddeeva_fast(v - vb, ak)
