@@ -279,12 +279,13 @@ _WT_STEP = 0.2
 _WT_ORDER = 6
 _WT_YMAX = 2.0
 _WT_NX = 29
+_WT_NY = 11
 
 
 def _faddeeva_table():
     """Taylor coefficients w⁽ⁿ⁾(z₀)/n! at z₀ = x₀ + i y₀, x₀ = 0..5.6, y₀ = 0..2 (step 0.2), as (re, im)."""
     xs = np.arange(_WT_NX) * _WT_STEP
-    ys = np.arange(11) * _WT_STEP
+    ys = np.arange(_WT_NY) * _WT_STEP
     z0 = xs[None, :] + 1j * ys[:, None]
     w = wofz(z0)
     der = [w, -2.0 * z0 * w + 2j / math.sqrt(math.pi)]          # w' = -2 z w + 2i/√π
@@ -422,6 +423,38 @@ def _w_rational(x, y):
     return (r1r if far else q2 * (pr * dr2 + pi_ * di2)), (r1i if far else q2 * (pi_ * dr2 - pr * di2))
 
 
+@nb.njit(cache=True, inline="always")
+def _w_table(x, y):
+    """w(x + i y) from the Taylor table (|x| + y < 5.5, y ≤ 2; index clamped, so finite anywhere)."""
+    ax = abs(x)
+    ix = min(int(ax * (1.0 / _WT_STEP) + 0.5), _WT_NX - 1)
+    iy = min(int(y * (1.0 / _WT_STEP) + 0.5), _WT_NY - 1)
+    dx = ax - ix * _WT_STEP
+    dy = y - iy * _WT_STEP
+    wr = _WT[iy, ix, 6, 0]
+    wi = _WT[iy, ix, 6, 1]
+    wr, wi = wr * dx - wi * dy + _WT[iy, ix, 5, 0], wr * dy + wi * dx + _WT[iy, ix, 5, 1]
+    wr, wi = wr * dx - wi * dy + _WT[iy, ix, 4, 0], wr * dy + wi * dx + _WT[iy, ix, 4, 1]
+    wr, wi = wr * dx - wi * dy + _WT[iy, ix, 3, 0], wr * dy + wi * dx + _WT[iy, ix, 3, 1]
+    wr, wi = wr * dx - wi * dy + _WT[iy, ix, 2, 0], wr * dy + wi * dx + _WT[iy, ix, 2, 1]
+    wr, wi = wr * dx - wi * dy + _WT[iy, ix, 1, 0], wr * dy + wi * dx + _WT[iy, ix, 1, 1]
+    wr, wi = wr * dx - wi * dy + _WT[iy, ix, 0, 0], wr * dy + wi * dx + _WT[iy, ix, 0, 1]
+    return wr, (wi if x >= 0.0 else -wi)
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _eta_i_vec(dl, rd, vs, y, kc, h, eu, dt, dsk):
+    """B = 0: η_I of all wavelengths at one point (y ≤ 2) into ``eu`` and the steps' Δτ into ``dt``."""
+    for j in range(dl.size):
+        x = dl[j] * rd - vs
+        wr, wi = _w_table(x, y)
+        rr, ri = _w_rational(x, y)
+        hp = wr if abs(x) + y < 5.5 else rr
+        ei = kc + h * (hp * 0.0 + hp * 2.0)
+        dt[j] = 0.5 * (eu[j] + ei) * dsk
+        eu[j] = ei
+
+
 @nb.njit(cache=True, error_model="numpy")
 def _profiles_vec(dl, rd, vs, y, vb, hp, fp, hs, fs, hd, fd):
     """
@@ -433,19 +466,7 @@ def _profiles_vec(dl, rd, vs, y, vb, hp, fp, hs, fs, hd, fd):
     for j in range(dl.size):
         x = dl[j] * rd - vs
         ax = abs(x)
-        ix = min(int(ax * (1.0 / _WT_STEP) + 0.5), _WT_NX - 1)
-        iy = int(y * (1.0 / _WT_STEP) + 0.5)
-        dx = ax - ix * _WT_STEP
-        dy = y - iy * _WT_STEP
-        wr = _WT[iy, ix, 6, 0]
-        wi = _WT[iy, ix, 6, 1]
-        wr, wi = wr * dx - wi * dy + _WT[iy, ix, 5, 0], wr * dy + wi * dx + _WT[iy, ix, 5, 1]
-        wr, wi = wr * dx - wi * dy + _WT[iy, ix, 4, 0], wr * dy + wi * dx + _WT[iy, ix, 4, 1]
-        wr, wi = wr * dx - wi * dy + _WT[iy, ix, 3, 0], wr * dy + wi * dx + _WT[iy, ix, 3, 1]
-        wr, wi = wr * dx - wi * dy + _WT[iy, ix, 2, 0], wr * dy + wi * dx + _WT[iy, ix, 2, 1]
-        wr, wi = wr * dx - wi * dy + _WT[iy, ix, 1, 0], wr * dy + wi * dx + _WT[iy, ix, 1, 1]
-        wr, wi = wr * dx - wi * dy + _WT[iy, ix, 0, 0], wr * dy + wi * dx + _WT[iy, ix, 0, 1]
-        wi = wi if x >= 0.0 else -wi
+        wr, wi = _w_table(x, y)
         rr, ri = _w_rational(x, y)
         br, bi = _w_rational(x + vb, y)
         qr, qi = _w_rational(x - vb, y)
@@ -595,14 +616,13 @@ def solve_columns(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all
             ak = aa[k]
             if not polar:
                 if ak <= _WT_YMAX:
-                    _profiles_vec(dl, rd, vs, ak, 0.0, pr0, pr1, pr2, pr3, pr4, pr5)
+                    _eta_i_vec(dl, rd, vs, ak, kc[k], h, eu[0], dt, dsk)
                 else:
                     for j in range(nl):
-                        pr0[j] = faddeeva_fast(dl[j] * rd - vs, ak)[0]
-                for j in range(nl):
-                    ei = kc[k] + h * (pr0[j] * c1 + pr0[j] * c2)
-                    dt[j] = 0.5 * (eu[0, j] + ei) * dsk
-                    eu[0, j] = ei
+                        hp = faddeeva_fast(dl[j] * rd - vs, ak)[0]
+                        ei = kc[k] + h * (hp * c1 + hp * c2)
+                        dt[j] = 0.5 * (eu[0, j] + ei) * dsk
+                        eu[0, j] = ei
                 for j in range(nl):
                     ex[j] = math.exp(-dt[j])
                 for j in range(nl):
