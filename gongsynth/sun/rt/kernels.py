@@ -21,6 +21,14 @@ solved as a 4 × 4 system (its symmetric part is positive definite, so Gaussian
 elimination needs no pivoting).  The ray starts at the deepest point where
 τ_c ≤ `TAU_BOTTOM` with the diffusion approximation and ignores the top layers
 above τ ≤ `TAU_TOP` at every wavelength.
+
+`solve_columns` is the fast implementation: per ray it advances all
+wavelengths together point by point in loops the compiler vectorises, takes
+w(z) from `faddeeva_fast` (a Taylor table where Humlíček's W4 is slow, more
+accurate than W4 there), the σ profiles from the Taylor series in the Zeeman
+shift when it is below `VB_TAYLOR` Doppler widths, and the scalar solve on rays
+with B = 0.  `solve_columns_reference` is the first, simple implementation of
+the same equations, kept to test and benchmark the fast one against.
 """
 from __future__ import annotations
 
@@ -28,7 +36,8 @@ import math
 
 import numba as nb
 import numpy as np
-from scipy.special import wofz
+
+from gongsynth.sun.rt.voigt import TABLE_YMAX, faddeeva, faddeeva_fast, sigma_taylor, w_rational, w_table
 
 __all__ = ["faddeeva", "faddeeva_fast", "solve_columns", "solve_columns_reference", "TAU_BOTTOM", "TAU_TOP",
            "VB_TAYLOR", "ZEEMAN_CM_PER_G"]
@@ -42,31 +51,6 @@ VB_TAYLOR = 0.1
 #: e / (4π m_e c²), cm⁻¹ G⁻¹: Δλ_B = this × λ² g B.
 ZEEMAN_CM_PER_G = 4.66864e-5
 _C = 2.99792458e10
-
-
-@nb.njit(cache=True, inline="always")
-def faddeeva(x, y):
-    """
-    Re and Im of the Faddeeva function w(x + i y), y ≥ 0 (Humlíček 1982, algorithm W4).
-
-    Relative accuracy ~1e-4 (tested against `scipy.special.wofz`).
-    """
-    t = complex(y, -x)
-    s = abs(x) + y
-    if s >= 15.0:
-        w = t * 0.5641896 / (0.5 + t * t)
-    elif s >= 5.5:
-        u = t * t
-        w = t * (1.410474 + u * 0.5641896) / (0.75 + u * (3.0 + u))
-    elif y >= 0.195 * abs(x) - 0.176:
-        w = ((16.4955 + t * (20.20933 + t * (11.96482 + t * (3.778987 + t * 0.5642236))))
-             / (16.4955 + t * (38.82363 + t * (39.27121 + t * (21.69274 + t * (6.699398 + t))))))
-    else:
-        u = t * t
-        w = np.exp(u) - t * (36183.31 - u * (3321.9905 - u * (1540.787 - u * (219.0313 - u * (
-            35.76683 - u * (1.320522 - u * 0.56419)))))) / (32066.6 - u * (24322.84 - u * (
-                9022.228 - u * (2186.181 - u * (364.2191 - u * (61.57037 - u * (1.841439 - u)))))))
-    return w.real, w.imag
 
 
 @nb.njit(cache=True, inline="always")
@@ -150,8 +134,8 @@ def _solve4(q, u, v, rq, ru, rv, al, b0, b1, b2, b3):
 
 
 @nb.njit(parallel=True, cache=True)
-def solve_columns_reference(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all, damp_all, src_all, vlos,
-                  bpar, b1, b2, out_i, out_q, out_u, out_v, log_tau_c, log_tau_core):
+def solve_columns_reference(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all, damp_all, src_all,
+                            vlos, bpar, b1, b2, out_i, out_q, out_u, out_v, log_tau_c, log_tau_core):
     """
     Emergent Stokes spectra of a block of rays: the simple reference path of `solve_columns`.
 
@@ -274,91 +258,9 @@ def solve_columns_reference(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_al
                     en = ec
 
 
-# The fast path: a tabulated Faddeeva function, depth-outer loops, the scalar solve where B = 0.
-_WT_STEP = 0.2
-_WT_ORDER = 6
-_WT_YMAX = 2.0
-_WT_NX = 29
-_WT_NY = 11
-
-
-def _faddeeva_table():
-    """Taylor coefficients w⁽ⁿ⁾(z₀)/n! at z₀ = x₀ + i y₀, x₀ = 0..5.6, y₀ = 0..2 (step 0.2), as (re, im)."""
-    xs = np.arange(_WT_NX) * _WT_STEP
-    ys = np.arange(_WT_NY) * _WT_STEP
-    z0 = xs[None, :] + 1j * ys[:, None]
-    w = wofz(z0)
-    der = [w, -2.0 * z0 * w + 2j / math.sqrt(math.pi)]          # w' = -2 z w + 2i/√π
-    for n in range(1, _WT_ORDER):
-        der.append(-2.0 * z0 * der[n] - 2.0 * n * der[n - 1])   # w⁽ⁿ⁺¹⁾ = -2 z w⁽ⁿ⁾ - 2n w⁽ⁿ⁻¹⁾
-    c = np.stack([der[n] / math.factorial(n) for n in range(_WT_ORDER + 1)], axis=-1)
-    return np.ascontiguousarray(np.stack([c.real, c.imag], axis=-1))
-
-
-_WT = _faddeeva_table()
-
-
-@nb.njit(cache=True, inline="always")
-def faddeeva_fast(x, y):
-    """
-    Re and Im of w(x + i y), y ≥ 0: Humlíček's W4 where |x| + y ≥ 5.5, else a Taylor table.
-
-    Where |x| + y < 5.5 and y ≤ 2 (Humlíček's costly regions 3 and 4) w is the
-    6th-order Taylor polynomial about the nearest node of a 0.2-step grid whose
-    coefficients come from `scipy.special.wofz` (error < 1e-7 of w(i y)); with
-    y > 2 there W4's region 3.  Elsewhere identical to `faddeeva`.
-
-    Parameters
-    ----------
-    x, y : float
-        Real and imaginary parts of the argument (y ≥ 0).
-
-    Returns
-    -------
-    tuple of float
-        Re w (the Voigt function H) and Im w (the Faraday–Voigt function, 2F).
-
-    Examples
-    --------
-    >>> h, f = faddeeva_fast(0.0, 0.05)
-    >>> round(h, 6)
-    0.945343
-    """
-    s = abs(x) + y
-    if s >= 15.0:
-        t = complex(y, -x)
-        w = t * 0.5641896 / (0.5 + t * t)
-        return w.real, w.imag
-    if s >= 5.5:
-        t = complex(y, -x)
-        u = t * t
-        w = t * (1.410474 + u * 0.5641896) / (0.75 + u * (3.0 + u))
-        return w.real, w.imag
-    if y <= _WT_YMAX:
-        ax = abs(x)
-        ix = int(ax * (1.0 / _WT_STEP) + 0.5)
-        iy = int(y * (1.0 / _WT_STEP) + 0.5)
-        dx = ax - ix * _WT_STEP
-        dy = y - iy * _WT_STEP
-        c = _WT[iy, ix]
-        wr = c[6, 0]
-        wi = c[6, 1]
-        wr, wi = wr * dx - wi * dy + c[5, 0], wr * dy + wi * dx + c[5, 1]
-        wr, wi = wr * dx - wi * dy + c[4, 0], wr * dy + wi * dx + c[4, 1]
-        wr, wi = wr * dx - wi * dy + c[3, 0], wr * dy + wi * dx + c[3, 1]
-        wr, wi = wr * dx - wi * dy + c[2, 0], wr * dy + wi * dx + c[2, 1]
-        wr, wi = wr * dx - wi * dy + c[1, 0], wr * dy + wi * dx + c[1, 1]
-        wr, wi = wr * dx - wi * dy + c[0, 0], wr * dy + wi * dx + c[0, 1]
-        return wr, (wi if x >= 0.0 else -wi)
-    t = complex(y, -x)
-    w = ((16.4955 + t * (20.20933 + t * (11.96482 + t * (3.778987 + t * 0.5642236))))
-         / (16.4955 + t * (38.82363 + t * (39.27121 + t * (21.69274 + t * (6.699398 + t))))))
-    return w.real, w.imag
-
-
 @nb.njit(cache=True, inline="always")
 def _fast_elements(v, a, vb, kc, h, c1, c2, cq, cu, cv):
-    """(η_I, η_Q/η_I, η_U/η_I, η_V/η_I, ρ_Q/η_I, ρ_U/η_I, ρ_V/η_I); h = κ_L/2, c1,2 = 1 ∓ cos²γ, cv = cos γ."""
+    """(η_I, η_Q,U,V/η_I, ρ_Q,U,V/η_I) at one point; h = κ_L/2, c1,2 = 1 ∓ cos²γ, cv = cos γ."""
     hp, fp = faddeeva_fast(v, a)
     if vb == 0.0:
         return kc + h * (hp * c1 + hp * c2), 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
@@ -373,82 +275,13 @@ def _fast_elements(v, a, vb, kc, h, c1, c2, cq, cu, cv):
     return ei, t * cq, t * cu, g * (hr - hb) * cv, r * cq, r * cu, g * (fr - fb) * cv
 
 
-@nb.njit(cache=True, inline="always")
-def _sigma_taylor(x, y, vb, wr, wi):
-    """
-    σ components from w(z) = wr + i wi by the Taylor series in ±vb (z = x + i y, |vb| ≤ `VB_TAYLOR`).
-
-    Returns Re and Im of [w(z + vb) + w(z − vb)]/2 and of w(z − vb) − w(z + vb), with
-    w⁽ⁿ⁾ from w' = −2 z w + 2i/√π, w⁽ⁿ⁺¹⁾ = −2 z w⁽ⁿ⁾ − 2 n w⁽ⁿ⁻¹⁾ (terms up to vb⁷).
-    """
-    zr = -2.0 * x
-    zi = -2.0 * y
-    d0r, d0i = wr, wi
-    d1r = zr * d0r - zi * d0i
-    d1i = zr * d0i + zi * d0r + 1.1283791670955126
-    er, ei_, odr, odi = d0r, d0i, vb * d1r, vb * d1i
-    c = vb
-    for n in range(1, 7):
-        d2r = zr * d1r - zi * d1i - 2.0 * n * d0r
-        d2i = zr * d1i + zi * d1r - 2.0 * n * d0i
-        c *= vb / (n + 1)
-        if n % 2 == 1:
-            er += c * d2r
-            ei_ += c * d2i
-        else:
-            odr += c * d2r
-            odi += c * d2i
-        d0r, d0i, d1r, d1i = d1r, d1i, d2r, d2i
-    return er, ei_, -2.0 * odr, -2.0 * odi
-
-
-@nb.njit(cache=True, inline="always")
-def _w_rational(x, y):
-    """Humlíček's W4 regions 1 (|x| + y ≥ 15) and 2 in real arithmetic, branch-free (for |x| + y ≥ 5.5)."""
-    ur = y * y - x * x                   # u = t², t = y − i x
-    ui = -2.0 * x * y
-    dr = 0.5 + ur
-    q = 0.5641896 / (dr * dr + ui * ui)
-    r1r = q * (y * dr - x * ui)
-    r1i = q * (-y * ui - x * dr)
-    nr = 1.410474 + 0.5641896 * ur
-    ni = 0.5641896 * ui
-    pr = y * nr + x * ni
-    pi_ = y * ni - x * nr
-    er = 3.0 + ur
-    dr2 = 0.75 + ur * er - ui * ui
-    di2 = ur * ui + ui * er
-    q2 = 1.0 / (dr2 * dr2 + di2 * di2)
-    far = abs(x) + y >= 15.0
-    return (r1r if far else q2 * (pr * dr2 + pi_ * di2)), (r1i if far else q2 * (pi_ * dr2 - pr * di2))
-
-
-@nb.njit(cache=True, inline="always")
-def _w_table(x, y):
-    """w(x + i y) from the Taylor table (|x| + y < 5.5, y ≤ 2; index clamped, so finite anywhere)."""
-    ax = abs(x)
-    ix = min(int(ax * (1.0 / _WT_STEP) + 0.5), _WT_NX - 1)
-    iy = min(int(y * (1.0 / _WT_STEP) + 0.5), _WT_NY - 1)
-    dx = ax - ix * _WT_STEP
-    dy = y - iy * _WT_STEP
-    wr = _WT[iy, ix, 6, 0]
-    wi = _WT[iy, ix, 6, 1]
-    wr, wi = wr * dx - wi * dy + _WT[iy, ix, 5, 0], wr * dy + wi * dx + _WT[iy, ix, 5, 1]
-    wr, wi = wr * dx - wi * dy + _WT[iy, ix, 4, 0], wr * dy + wi * dx + _WT[iy, ix, 4, 1]
-    wr, wi = wr * dx - wi * dy + _WT[iy, ix, 3, 0], wr * dy + wi * dx + _WT[iy, ix, 3, 1]
-    wr, wi = wr * dx - wi * dy + _WT[iy, ix, 2, 0], wr * dy + wi * dx + _WT[iy, ix, 2, 1]
-    wr, wi = wr * dx - wi * dy + _WT[iy, ix, 1, 0], wr * dy + wi * dx + _WT[iy, ix, 1, 1]
-    wr, wi = wr * dx - wi * dy + _WT[iy, ix, 0, 0], wr * dy + wi * dx + _WT[iy, ix, 0, 1]
-    return wr, (wi if x >= 0.0 else -wi)
-
-
 @nb.njit(cache=True, error_model="numpy")
 def _eta_i_vec(dl, rd, vs, y, kc, h, eu, dt, dsk):
     """B = 0: η_I of all wavelengths at one point (y ≤ 2) into ``eu`` and the steps' Δτ into ``dt``."""
     for j in range(dl.size):
         x = dl[j] * rd - vs
-        wr, wi = _w_table(x, y)
-        rr, ri = _w_rational(x, y)
+        wr, wi = w_table(x, y)
+        rr, ri = w_rational(x, y)
         hp = wr if abs(x) + y < 5.5 else rr
         ei = kc + h * (hp * 0.0 + hp * 2.0)
         dt[j] = 0.5 * (eu[j] + ei) * dsk
@@ -460,20 +293,20 @@ def _profiles_vec(dl, rd, vs, y, vb, hp, fp, hs, fs, hd, fd):
     """
     π and σ profiles of all wavelengths at one point with y ≤ 2, vb ≤ `VB_TAYLOR` (a vectorised loop).
 
-    Where |x| + y < 5.5: w(z) from the table and the σ components by `_sigma_taylor`;
+    Where |x| + y < 5.5: w(z) from the table and the σ components by `sigma_taylor`;
     elsewhere W4's rational regions at z and z ± vb.
     """
     for j in range(dl.size):
         x = dl[j] * rd - vs
         ax = abs(x)
-        wr, wi = _w_table(x, y)
-        rr, ri = _w_rational(x, y)
-        br, bi = _w_rational(x + vb, y)
-        qr, qi = _w_rational(x - vb, y)
+        wr, wi = w_table(x, y)
+        rr, ri = w_rational(x, y)
+        br, bi = w_rational(x + vb, y)
+        qr, qi = w_rational(x - vb, y)
         core = ax + y < 5.5
         hr = wr if core else rr
         fr = wi if core else ri
-        sr, si, tr, ti = _sigma_taylor(x, y, vb, hr, fr)
+        sr, si, tr, ti = sigma_taylor(x, y, vb, hr, fr)
         hp[j] = hr
         fp[j] = fr
         hs[j] = sr if core else 0.5 * (br + qr)
@@ -595,8 +428,8 @@ def solve_columns(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all
         ktop = max(ktop, kbot + 1)
         polar = magnetic[kbot:ktop + 1].any()
         wk = np.zeros((12, nl))
-        i0, i1, i2, i3, pr0, pr1, pr2, pr3, pr4, pr5, dt, ex = (wk[0], wk[1], wk[2], wk[3], wk[4], wk[5], wk[6],
-                                                                wk[7], wk[8], wk[9], wk[10], wk[11])
+        i0, i1, i2, i3, pr0, pr1 = wk[0], wk[1], wk[2], wk[3], wk[4], wk[5]
+        pr2, pr3, pr4, pr5, dt, ex = wk[6], wk[7], wk[8], wk[9], wk[10], wk[11]
         eu = np.empty((7, nl))        # elements at the point below
         ec = np.empty((7, nl))        # and at the current point
         k = kbot
@@ -615,7 +448,7 @@ def solve_columns(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all
             rd, vs, vb, h, c1, c2 = pt[0, k], pt[1, k], pt[2, k], pt[3, k], pt[4, k], pt[5, k]
             ak = aa[k]
             if not polar:
-                if ak <= _WT_YMAX:
+                if ak <= TABLE_YMAX:
                     _eta_i_vec(dl, rd, vs, ak, kc[k], h, eu[0], dt, dsk)
                 else:
                     for j in range(nl):
@@ -630,9 +463,9 @@ def solve_columns(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all
                     i0[j] = e * i0[j] + al * bc + be * bu
                 continue
             cq, cu, cv = pt[6, k], pt[7, k], pt[8, k]
-            if vb <= VB_TAYLOR and ak <= _WT_YMAX:
+            if vb <= VB_TAYLOR and ak <= TABLE_YMAX:
                 _profiles_vec(dl, rd, vs, ak, vb, pr0, pr1, pr2, pr3, pr4, pr5)
-            for j in range(nl if vb > VB_TAYLOR or ak > _WT_YMAX else 0):
+            for j in range(nl if vb > VB_TAYLOR or ak > TABLE_YMAX else 0):
                 v = dl[j] * rd - vs
                 hp, fp = faddeeva_fast(v, ak)
                 pr0[j] = hp
@@ -642,8 +475,8 @@ def solve_columns(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all
                     pr3[j] = fp
                     pr4[j] = 0.0
                     pr5[j] = 0.0
-                elif vb <= VB_TAYLOR and abs(v) + ak < 5.5 and ak <= _WT_YMAX:
-                    pr2[j], pr3[j], pr4[j], pr5[j] = _sigma_taylor(v, ak, vb, hp, fp)
+                elif vb <= VB_TAYLOR and abs(v) + ak < 5.5 and ak <= TABLE_YMAX:
+                    pr2[j], pr3[j], pr4[j], pr5[j] = sigma_taylor(v, ak, vb, hp, fp)
                 else:
                     hb, fb = faddeeva_fast(v + vb, ak)
                     hr, fr = faddeeva_fast(v - vb, ak)
@@ -679,8 +512,8 @@ def solve_columns(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all
         tau = 0.0
         log_tau_core[p, nz - 1] = -12.0
         k = nz - 1
-        en0 = _fast_elements(dl[j] * pt[0, k] - pt[1, k], aa[k], pt[2, k], kc[k], pt[3, k], pt[4, k], pt[5, k],
-                             pt[6, k], pt[7, k], pt[8, k])[0]
+        en0 = _fast_elements(dl[j] * pt[0, k] - pt[1, k], aa[k], pt[2, k], kc[k], pt[3, k], pt[4, k],
+                             pt[5, k], pt[6, k], pt[7, k], pt[8, k])[0]
         for k in range(nz - 2, -1, -1):
             ec0 = _fast_elements(dl[j] * pt[0, k] - pt[1, k], aa[k], pt[2, k], kc[k], pt[3, k], pt[4, k],
                                  pt[5, k], pt[6, k], pt[7, k], pt[8, k])[0]
