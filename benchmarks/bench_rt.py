@@ -35,6 +35,12 @@ def timed(fn, *args, **kwargs):
     return out, time.perf_counter() - t0
 
 
+def uniform_field(atm, bz):
+    """``atm`` with a vertical field of ``bz`` G."""
+    field = np.array([0.0, 0.0, bz])[:, None, None, None] * np.ones((3,) + atm.shape)
+    return atm.replace(magnetic_field=field * u.G)
+
+
 @contextlib.contextmanager
 def reference_solver():
     """Run `synthesize` with the first, simple solver."""
@@ -53,6 +59,9 @@ def main():
     print(f"numba threads: {numba.get_num_threads()}")
     falc = gongsynth.Atmosphere.from_1d(DATA / "real/models/FALC_82.atmos")
     gongsynth.rt.synthesize(falc, progress=False)                      # compile
+    with reference_solver():
+        gongsynth.rt.synthesize(uniform_field(falc, 100.0), progress=False)
+    gongsynth.rt.synthesize(uniform_field(falc, 100.0), progress=False)
     muram = gongsynth.Atmosphere.from_muram(DATA / "mhd/muram-test3d-it000000")
     for mu in (1.0, 0.5):
         fast, t = timed(gongsynth.rt.synthesize, muram, mu=mu, azimuth=-90 * u.deg, progress=False)

@@ -193,7 +193,8 @@ def synthesize(atmosphere, *, mu=1.0, azimuth=0 * u.deg, wavelength=None, truth=
         res = [np.empty((ncol, lam_cm.size), dtype=np.float32) for _ in range(4)]
         log_tc = np.empty((ncol, nz), dtype=np.float32)
         log_tl = np.empty((ncol, nz), dtype=np.float32)
-        solve_columns(lam_cm, const[0], const[10], core, ds, *opac, vlos, bpar, b1, b2, *res, log_tc, log_tl)
+        solve_columns(lam_cm, const[0], const[10], core if scale == "core" else -1, ds, *opac, vlos, bpar, b1,
+                      b2, *res, log_tc, log_tl)
         tb = np.empty(ncol, dtype=np.float32)
         th = np.empty(ncol, dtype=np.float32)
         los_field_at_depth(z_km, log_tl if scale == "core" else log_tc, bpar, level, scale == "height",

@@ -230,7 +230,7 @@ def sigma_taylor(x, y, vb, wr, wi):
     for n in range(1, 7):
         d2r = zr * d1r - zi * d1i - 2.0 * n * d0r
         d2i = zr * d1i + zi * d1r - 2.0 * n * d0i
-        c *= vb / (n + 1)
+        c *= vb * (1.0 / (n + 1))
         if n % 2 == 1:
             er += c * d2r
             ei_ += c * d2i
