@@ -310,6 +310,22 @@ def _profiles_vec(dl, rd, vs, y, vb, hp, fp, hs, fs, hd, fd):
         hs[j], fs[j], hd[j], fd[j] = sigma_taylor(x, y, vb, hr, fr)
 
 
+_EXP2_NEG = np.ldexp(1.0, -np.arange(1080))          # 2⁻ⁿ
+_EXP_TAYLOR = np.array([(-1.0) ** n / math.factorial(n) for n in range(16)])
+
+
+@nb.njit(cache=True, inline="always")
+def _exp_neg(t):
+    """e^(−t), t ≥ 0, without a library call (vectorisable): 2^(−n) e^(−r), r ∈ [0, ln 2), Taylor to r¹⁵."""
+    t = min(t, 746.0)                                   # e^(-t) = 0 in float64 beyond 745.2
+    n = int(t * 1.4426950408889634)
+    r = (t - n * 0.6931471803691238) - n * 1.9082149292705877e-10
+    p = _EXP_TAYLOR[15]
+    for m in range(14, -1, -1):
+        p = p * r + _EXP_TAYLOR[m]
+    return p * _EXP2_NEG[n]
+
+
 @nb.njit(cache=True, inline="always")
 def _weights(dt, ex):
     """`_delo_weights` with exp(-dt) given (branch-free for vectorisation)."""
@@ -453,7 +469,7 @@ def solve_columns(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all
                         dt[j] = 0.5 * (eu[0, j] + ei) * dsk
                         eu[0, j] = ei
                 for j in range(nl):
-                    ex[j] = math.exp(-dt[j])
+                    ex[j] = _exp_neg(dt[j])
                 for j in range(nl):
                     e, al, be = _weights(dt[j], ex[j])
                     i0[j] = e * i0[j] + al * bc + be * bu
@@ -495,7 +511,7 @@ def solve_columns(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all
                 ec[6, j] = g * pr5[j] * cv
                 dt[j] = 0.5 * (eu[0, j] + ei) * dsk
             for j in range(nl):
-                ex[j] = math.exp(-dt[j])
+                ex[j] = _exp_neg(dt[j])
             _step(i0, i1, i2, i3, eu, ec, dt, ex, bu, bc)
             eu, ec = ec, eu
         for j in range(nl):
