@@ -258,7 +258,7 @@ def solve_columns_reference(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_al
                     en = ec
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True)
 def _fast_elements(v, a, vb, kc, h, c1, c2, cq, cu, cv):
     """(η_I, η_Q,U,V/η_I, ρ_Q,U,V/η_I) at one point; h = κ_L/2, c1,2 = 1 ∓ cos²γ, cv = cos γ."""
     hp, fp = faddeeva_fast(v, a)

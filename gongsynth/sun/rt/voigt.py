@@ -71,7 +71,7 @@ def faddeeva(x, y):
 
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True)
 def faddeeva_fast(x, y):
     """
     Re and Im of w(x + i y), y ≥ 0: Humlíček's W4 where |x| + y ≥ 5.5, else a Taylor table.
