@@ -2,14 +2,18 @@
 Benchmark: LTE Stokes synthesis (gongsynth.rt) against Lightweaver per column, and a large cube.
 
 Times `gongsynth.rt.synthesize` on the MURaM test snapshot (64² columns × 192
-heights × 51 wavelengths) and on FAL-C columns, and Lightweaver's LTE formal
-solution of one FAL-C column (`gongsynth.sun.photosphere.reference.falc_stokes`,
-when installed) in the same process; prints columns per second and the ratio.
-``--large N`` also times an N² × 100-height horizontally tiled FAL-C box.
+heights × 51 wavelengths) and on FAL-C columns, each with the fast solver and
+with the first, simple one (`~gongsynth.sun.rt.kernels.solve_columns_reference`)
+in the same process (ratio = speed-up, and the largest |ΔI|, |ΔV| in units of
+the continuum), and Lightweaver's LTE formal solution of one FAL-C column
+(`gongsynth.sun.photosphere.reference.falc_stokes`, when installed); prints
+columns per second.  ``--large N`` also times an N² × 100-height box (FAL-C
+with 2 % temperature noise, B = 0) and extrapolates to 1024²; peak RSS.
 
 Run:  python benchmarks/bench_rt.py [--large 256]
 """
 import argparse
+import contextlib
 import resource
 import time
 from pathlib import Path
@@ -19,6 +23,8 @@ import numba
 import numpy as np
 
 import gongsynth
+from gongsynth.sun.rt import synthesis
+from gongsynth.sun.rt.kernels import solve_columns_reference
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 
@@ -29,6 +35,23 @@ def timed(fn, *args, **kwargs):
     return out, time.perf_counter() - t0
 
 
+def uniform_field(atm, bz):
+    """``atm`` with a vertical field of ``bz`` G."""
+    field = np.array([0.0, 0.0, bz])[:, None, None, None] * np.ones((3,) + atm.shape)
+    return atm.replace(magnetic_field=field * u.G)
+
+
+@contextlib.contextmanager
+def reference_solver():
+    """Run `synthesize` with the first, simple solver."""
+    fast = synthesis.solve_columns
+    synthesis.solve_columns = solve_columns_reference
+    try:
+        yield
+    finally:
+        synthesis.solve_columns = fast
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
     parser.add_argument("--large", type=int, default=0, help="also time an N x N FAL-C box with 100 heights")
@@ -36,18 +59,29 @@ def main():
     print(f"numba threads: {numba.get_num_threads()}")
     falc = gongsynth.Atmosphere.from_1d(DATA / "real/models/FALC_82.atmos")
     gongsynth.rt.synthesize(falc, progress=False)                      # compile
+    with reference_solver():
+        gongsynth.rt.synthesize(uniform_field(falc, 100.0), progress=False)
+    gongsynth.rt.synthesize(uniform_field(falc, 100.0), progress=False)
     muram = gongsynth.Atmosphere.from_muram(DATA / "mhd/muram-test3d-it000000")
-    _, t = timed(gongsynth.rt.synthesize, muram, progress=False)
-    print(f"MURaM 64x64x192, mu=1: {t:6.2f} s = {64 * 64 / t:8.0f} columns/s")
-    _, t = timed(gongsynth.rt.synthesize, muram, mu=0.5, progress=False)
-    print(f"MURaM 64x64x192, mu=0.5: {t:6.2f} s = {64 * 64 / t:8.0f} columns/s")
+    for mu in (1.0, 0.5):
+        fast, t = timed(gongsynth.rt.synthesize, muram, mu=mu, azimuth=-90 * u.deg, progress=False)
+        with reference_solver():
+            ref, t_ref = timed(gongsynth.rt.synthesize, muram, mu=mu, azimuth=-90 * u.deg, progress=False)
+        ic = ref.I.value[:, :, :1]
+        di = np.abs(fast.I.value - ref.I.value).max() / ic.min()
+        dv = np.abs(fast.V.value - ref.V.value).max() / ic.min()
+        print(f"MURaM 64x64x192, mu={mu}: {t:6.2f} s = {64 * 64 / t:8.0f} columns/s; reference solver "
+              f"{64 * 64 / t_ref:6.0f} columns/s: x{t_ref / t:4.2f}; max |dI|, |dV| = {di:.1e}, {dv:.1e} Ic")
     n = 32
     box = gongsynth.Atmosphere(np.broadcast_to(falc.temperature, (falc.shape[0], n, n)), falc.z, 96 * u.km,
                                gas_pressure=np.broadcast_to(falc.gas_pressure, (falc.shape[0], n, n)),
                                electron_density=np.broadcast_to(falc.electron_density, (falc.shape[0], n, n)))
     _, t = timed(gongsynth.rt.synthesize, box, progress=False)
+    with reference_solver():
+        _, t_ref = timed(gongsynth.rt.synthesize, box, progress=False)
     ours = n * n / t
-    print(f"FAL-C {n}x{n} columns x 82 heights: {ours:8.0f} columns/s")
+    print(f"FAL-C {n}x{n} columns x 82 heights (B = 0): {ours:8.0f} columns/s; "
+          f"reference solver x{t_ref / t:4.2f}")
     try:
         from gongsynth.sun.photosphere.reference import falc_stokes
         falc_stokes([0] * u.G)                                          # warm up
@@ -71,6 +105,11 @@ def main():
         peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
         print(f"{n}x{n}x100 heights x 51 wavelengths: {t:7.1f} s = {n * n / t:8.0f} columns/s; "
               f"peak RSS {peak:.0f} MiB (1024^2 extrapolated: {t * (1024 / n) ** 2:7.0f} s)")
+        mag = big.replace(magnetic_field=np.broadcast_to(np.array([30.0, -20.0, 100.0])[:, None, None, None],
+                                                         (3,) + temp.shape) * u.G)
+        _, t = timed(gongsynth.rt.synthesize, mag, progress=False)
+        print(f"  the same with a uniform 107 G field (4x4 solve): {t:7.1f} s = {n * n / t:8.0f} columns/s "
+              f"(1024^2 extrapolated: {t * (1024 / n) ** 2:7.0f} s)")
 
 
 if __name__ == "__main__":

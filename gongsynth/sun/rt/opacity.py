@@ -104,7 +104,8 @@ def planck(lam_cm, t):
 def _continuum(lam_cm, t, ne, nh):
     """Continuum opacity (cm⁻¹) and the H I density at one point."""
     kt_ev = t / _EV_K
-    phi_h = _SAHA_HALF * t ** 1.5 * math.exp(-13.5984 / kt_ev)        # U_HII/U_HI · 2 = 1
+    t15 = t * math.sqrt(t)
+    phi_h = _SAHA_HALF * t15 * math.exp(-13.5984 / kt_ev)        # U_HII/U_HI · 2 = 1
     n_hi = nh * ne / (ne + phi_h)
     n_p = nh - n_hi
     lam_um = lam_cm * 1e4
@@ -116,7 +117,7 @@ def _continuum(lam_cm, t, ne, nh):
         s = math.sqrt(x)
         series = 152.519 + s * (49.534 + s * (-118.858 + s * (92.536 + s * (-34.194 + s * 4.982))))
         sigma = 1e-18 * lam_um ** 3 * x * s * series
-        n_hm = n_hi * ne * 1.0353e-16 * t ** -1.5 * math.exp(0.754195 / kt_ev)
+        n_hm = n_hi * ne * 1.0353e-16 / t15 * math.exp(0.754195 / kt_ev)
         kappa += sigma * n_hm * stim
     # H- free-free (John 1988, λ > 0.3645 µm), per H I atom per unit electron pressure.
     theta = 5040.0 / t
@@ -128,9 +129,11 @@ def _continuum(lam_cm, t, ne, nh):
     e_ = (0.0, -1341.537, 5303.609, -7510.494, 4400.067, -901.788)
     f_ = (0.0, 208.952, -812.939, 1132.738, -655.020, 132.985)
     il = 1.0 / lam_um
+    pw = theta                                  # θ^((n + 2)/2)
+    st = math.sqrt(theta)
     for n in range(6):
-        ff += theta ** ((n + 2) / 2.0) * (lam_um * lam_um * a_[n] + b_[n] + il * (c_[n] + il * (
-            d_[n] + il * (e_[n] + il * f_[n]))))
+        ff += pw * (lam_um * lam_um * a_[n] + b_[n] + il * (c_[n] + il * (d_[n] + il * (e_[n] + il * f_[n]))))
+        pw *= st
     kappa += 1e-29 * ff * n_hi * ne * _K * t
     # H I bound-free from n = 3..8 plus the integral above 8 (Gray 2005, eq. 8.8), Gaunt factor 1.
     nu = _C / lam_cm
@@ -179,14 +182,15 @@ def point_opacity(t, ne, nh, vturb, const, pf_table):
     w = x - i
     ln_u1 = pf_table[0, i] * (1 - w) + pf_table[0, i + 1] * w
     ln_u2 = pf_table[1, i] * (1 - w) + pf_table[1, i + 1] * w
-    phi = 2.0 * _SAHA_HALF * t ** 1.5 * math.exp(ln_u2 - ln_u1 - const[5] / kt_ev)
+    phi = 2.0 * _SAHA_HALF * t * math.sqrt(t) * math.exp(ln_u2 - ln_u1 - const[5] / kt_ev)
     n_el = nh * const[4]
     n_neutral = n_el * ne / (ne + phi)
     n_low = n_neutral * const[2] * math.exp(-const[3] / kt_ev - ln_u1)
     stim = -math.expm1(-_H * _C / (lam * _K * t))
     dlam = lam / _C * math.sqrt(2.0 * _K * t / const[6] + vturb * vturb)
     kl = const[1] * n_low * stim / (_SQRT_PI * dlam)
-    gamma = const[7] + const[8] * t ** 0.3 * n_hi + const[9] * t ** (1.0 / 6.0) * ne
+    lnt = math.log(t)
+    gamma = const[7] + const[8] * math.exp(0.3 * lnt) * n_hi + const[9] * math.exp(lnt / 6.0) * ne
     dnu = _C * dlam / (lam * lam)
     a = gamma / (4.0 * math.pi * dnu)
     return kc, kl, dlam, a, planck(lam, t)

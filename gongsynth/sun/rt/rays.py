@@ -78,10 +78,17 @@ def sample_rays(field, rows, dx, dy, out):
     """
     nz, ny, nx = field.shape
     nr = rows.size
+    aligned = True                   # vertical rays (or whole-pixel shifts): plain copies
+    for k in range(nz):
+        aligned = aligned and dx[k] == math.floor(dx[k]) and dy[k] == math.floor(dy[k])
     for q in nb.prange(nr * nx):
         r = q // nx
         i = q - r * nx
         j = rows[r]
+        if aligned:
+            for k in range(nz):
+                out[q, k] = field[k, (j + int(dy[k])) % ny, (i + int(dx[k])) % nx]
+            continue
         for k in range(nz):
             fx0 = math.floor(dx[k])
             fy0 = math.floor(dy[k])

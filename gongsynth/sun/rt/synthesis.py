@@ -77,7 +77,13 @@ def reference_height(atmosphere, line=None, max_columns=4096):
     z = atmosphere.z.to_value(u.cm)
     seg = 0.5 * (k[:, 1:] + k[:, :-1]) * np.diff(z)
     tau = np.concatenate([np.cumsum(seg[:, ::-1], axis=1)[:, ::-1], np.zeros((k.shape[0], 1))], axis=1)
-    heights = [np.interp(0.0, -np.log10(np.maximum(t, 1e-30)), z) for t in tau]
+    x = -np.log10(np.maximum(tau, 1e-30))                 # increases upward; the height where it is 0
+    above = np.argmax(x >= 0.0, axis=1)
+    lo = np.maximum(above - 1, 0)
+    rr = np.arange(x.shape[0])
+    x0, x1 = x[rr, lo], x[rr, above]
+    w = np.where(x1 > x0, (0.0 - x0) / np.where(x1 > x0, x1 - x0, 1.0), 0.0)
+    heights = np.where(x[:, 0] >= 0.0, z[0], z[lo] + w * (z[above] - z[lo]))
     return float(np.mean(heights)) * 1e-5
 
 
@@ -187,7 +193,8 @@ def synthesize(atmosphere, *, mu=1.0, azimuth=0 * u.deg, wavelength=None, truth=
         res = [np.empty((ncol, lam_cm.size), dtype=np.float32) for _ in range(4)]
         log_tc = np.empty((ncol, nz), dtype=np.float32)
         log_tl = np.empty((ncol, nz), dtype=np.float32)
-        solve_columns(lam_cm, const[0], const[10], core, ds, *opac, vlos, bpar, b1, b2, *res, log_tc, log_tl)
+        solve_columns(lam_cm, const[0], const[10], core if scale == "core" else -1, ds, *opac, vlos, bpar, b1,
+                      b2, *res, log_tc, log_tl)
         tb = np.empty(ncol, dtype=np.float32)
         th = np.empty(ncol, dtype=np.float32)
         los_field_at_depth(z_km, log_tl if scale == "core" else log_tc, bpar, level, scale == "height",
