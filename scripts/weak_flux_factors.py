@@ -1,4 +1,4 @@
-"""
+r"""
 Measure the papers' weak-flux calibration factor of a built-in Sun at several latitudes.
 
 Each latitude runs `gongsynth.simulate` once per seed and fits the papers'
@@ -7,7 +7,8 @@ numbers in the issue-14 notes came from, e.g.::
 
     python scripts/weak_flux_factors.py --sun model-atmosphere --shape 1024 --latitudes 0 60 --seeds 1
     python scripts/weak_flux_factors.py --shape 1024 --latitudes 0 --seeds 1 --knobs '{"canopy": false}'
-    python scripts/weak_flux_factors.py --sun milne-eddington --shape 256 --detector 430 --seeds 1 2 3
+    python scripts/weak_flux_factors.py --sun milne-eddington --shape 256 --detector 430 \
+        --knobs '{"spot": false}'
 
 A 1024² model-atmosphere run takes 5-9 minutes on 2 cores (the radiative transfer).
 """
