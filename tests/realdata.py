@@ -16,6 +16,7 @@ SKYVALUE = -2000 G.
 import functools
 import hashlib
 import os
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -23,7 +24,7 @@ import pytest
 import sunpy.data.test
 from astropy.io import fits
 
-__all__ = ["REAL_DATA", "real_file", "gong_header", "gong_rho", "write_gong_fits", "SHA256"]
+__all__ = ["REAL_DATA", "real_file", "load_real", "gong_header", "gong_rho", "write_gong_fits", "SHA256"]
 
 #: Folder of the real data files.
 REAL_DATA = Path(os.environ.get("GONGSYNTH_REAL_DATA")
@@ -102,3 +103,12 @@ def write_gong_fits(path, data, header=None, *, sky=True):
     hdu.scale("int16", bscale=bscale, bzero=0)
     hdu.writeto(path, overwrite=True)
     return Path(path)
+
+
+def load_real(relpath, kind):
+    """A real file through `gongsynth.load_observation` (skips when absent), header fixes silenced."""
+    import gongsynth
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", fits.verify.VerifyWarning)
+        return gongsynth.load_observation(real_file(relpath), kind=kind)

@@ -6,7 +6,6 @@ The real files are the Big Bear magnetogram and intensity image of 2009-09-05
 are absent.  The simulations are small (1 minute, a few dozen pixels).
 """
 import types
-import warnings
 
 import astropy.units as u
 import numpy as np
@@ -22,7 +21,7 @@ from gongsynth.analysis.disk import disk_coordinates
 from gongsynth.analysis.noise import noise_estimate
 from gongsynth.chain import build_chain
 
-from .realdata import real_file
+from .realdata import load_real, real_file
 
 MAGNETOGRAM = "gong/bbbqa090905t1854.fits.gz"
 INTENSITY = "gong/bbiqa090905t1854.fits.gz"
@@ -31,20 +30,14 @@ SMALL = dict(detector_shape=32, duration=1 * u.min, photosphere_shape=(128, 128)
 CENTRE, CONTINUUM = 0, 1  # rows of the table
 
 
-def _load(relpath, kind):
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", fits.verify.VerifyWarning)
-        return gongsynth.load_observation(real_file(relpath), kind=kind)
-
-
 @pytest.fixture(scope="module")
 def intensity():
-    return _load(INTENSITY, "continuum")
+    return load_real(INTENSITY, "continuum")
 
 
 @pytest.fixture(scope="module")
 def magnetogram():
-    return _load(MAGNETOGRAM, "magnetogram")
+    return load_real(MAGNETOGRAM, "magnetogram")
 
 
 @pytest.fixture(scope="module")

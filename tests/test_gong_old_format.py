@@ -18,21 +18,15 @@ from sunpy.coordinates import sun
 import gongsynth
 from gongsynth.analysis.disk import disk_centre_pixel, disk_coordinates
 
-from .realdata import real_file
+from .realdata import load_real, real_file
 
 MAGNETOGRAM = "gong/bbbqa090905t1854.fits.gz"
 INTENSITY = "gong/bbiqa090905t1854.fits.gz"
 
 
-def _load(relpath, kind):
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", fits.verify.VerifyWarning)
-        return gongsynth.load_observation(real_file(relpath), kind=kind)
-
-
 @pytest.fixture(scope="module")
 def magnetogram():
-    return _load(MAGNETOGRAM, "magnetogram")
+    return load_real(MAGNETOGRAM, "magnetogram")
 
 
 def test_old_header_places_the_disk(magnetogram):
@@ -69,7 +63,7 @@ def test_old_magnetogram_values_match_provenance(magnetogram):
 
 
 def test_old_intensity_image_reads_as_continuum():
-    image = _load(INTENSITY, "continuum")
+    image = load_real(INTENSITY, "continuum")
     rho, _ = disk_coordinates(image)
     centre, limb = np.mean(image.data[rho < 0.2]), np.mean(image.data[(rho > 0.9) & (rho < 0.95)])
     # Limb darkening at 676.8 nm: I(μ≈0.36)/I(1) ≈ 0.6-0.7, well below 1.
