@@ -98,17 +98,17 @@ def _reflect_into(buffer, plane, pads):
 
 def _level(plane, boundary, dtype, minus=None):
     """
-    The level transformed apart: the mean of every 8th sample of each axis of
-    ``plane`` (less ``minus``), in float32; 0 where a constant would not pass
-    unchanged (zero edges) or in float64.  Any constant would do: it only makes
-    the round-off relative to the contrast.
+    The level transformed apart: the mean of ``plane`` (less ``minus``; the
+    first block of rows of it for `BandLimitedImager`), in float32; 0 where a
+    constant would not pass unchanged (zero edges) or in float64.  Any
+    constant would do: it only makes the round-off relative to the contrast.
     """
     if boundary == "zero" or dtype != np.float32:
         return 0.0
-    sample = plane[::8, ::8].astype(np.float64)
+    mean = np.mean(plane, dtype=np.float64)
     if minus is not None:
-        sample -= minus[::8, ::8]
-    return float(np.float32(sample.mean()))
+        mean -= np.mean(minus, dtype=np.float64)
+    return float(np.float32(mean))
 
 
 class BandLimitedImager:
@@ -206,27 +206,33 @@ class BandLimitedImager:
         if near:
             work[:, work.shape[1] - near:] = field[:, near - 1::-1]
 
-    def _row_spectra(self, plane, level, minus):
-        """The kept row frequencies of every field row, (ny, hx + 1), in the planes' precision."""
+    def _row_spectra(self, plane, minus):
+        """
+        The kept row frequencies of every field row, (ny, hx + 1), in the planes' precision,
+        and the level taken out (the mean of the first block of rows; any constant would do).
+        """
         ny, nx = self.shape
         fx = self.fshape[1]
         kept = self._nx_kept
         out = np.empty((ny, kept), dtype=np.result_type(self.dtype, np.complex64))
-        level = self.dtype.type(level)
         buffer = np.empty((min(_BLOCK_ROWS, ny), fx), dtype=self.dtype)
+        level = None
         for r0 in range(0, ny, _BLOCK_ROWS):
-            block = plane[r0:r0 + _BLOCK_ROWS]
+            block = np.asarray(plane[r0:r0 + _BLOCK_ROWS], dtype=self.dtype)
+            other = None if minus is None else np.asarray(minus[r0:r0 + _BLOCK_ROWS], dtype=self.dtype)
+            if level is None:
+                level = _level(block, self.boundary, self.dtype, other)
+                shift = self.dtype.type(level)
             if self.boundary == "reflect":
                 work = buffer[:block.shape[0]]
-                self._fill_rows(work, block, None if minus is None else minus[r0:r0 + _BLOCK_ROWS], level)
+                self._fill_rows(work, block, other, shift)
             else:  # periodic: the row itself; zero edges: zero-padded to fx by the transform
-                work = block if minus is None else np.subtract(block, minus[r0:r0 + _BLOCK_ROWS],
-                                                              out=buffer[:block.shape[0], :nx])
+                work = block if other is None else np.subtract(block, other, out=buffer[:block.shape[0], :nx])
                 if level:
-                    work = work - level
+                    work = work - shift
             spectrum = scipy.fft.rfft(work, n=fx, axis=1, workers=self.workers)
             out[r0:r0 + block.shape[0]] = spectrum[:, :kept]
-        return out
+        return out, level
 
     def __call__(self, plane, minus=None):
         """
@@ -234,20 +240,19 @@ class BandLimitedImager:
 
         Parameters
         ----------
-        plane : `numpy.ndarray`
-            (ny, nx) samples.
-        minus : `numpy.ndarray`, optional
-            (ny, nx) samples subtracted from ``plane`` first (block by block:
-            the difference is never held whole).
+        plane : `numpy.ndarray` or `~gongsynth.stages.scene.scene.DeferredPlane`
+            (ny, nx) samples: an array, or anything whose row slices
+            (``plane[a:b]``) give arrays; it is read a block of rows at a time.
+        minus : optional
+            (ny, nx) samples, as ``plane``, subtracted from it first (block by
+            block: the difference is never held whole).
 
         Returns
         -------
         `numpy.ndarray`
             (ny // factor, nx // factor) float64: the mean over each detector pixel.
         """
-        plane = np.asarray(plane, dtype=self.dtype)
-        level = _level(plane, self.boundary, self.dtype, minus)
-        rows = self._row_spectra(plane, level, minus)
+        rows, level = self._row_spectra(plane, minus)
         fy = self.fshape[0]
         if self.boundary == "reflect":
             index = self._rows

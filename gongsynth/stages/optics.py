@@ -32,7 +32,7 @@ from gongsynth.stages.psf import (
     psf_profile,
     wrapped_kernel,
 )
-from gongsynth.stages.scene.scene import BOUNDARIES
+from gongsynth.stages.scene.scene import BOUNDARIES, DeferredStack
 from gongsynth.validation import check_finite, check_quantity
 
 __all__ = [
@@ -502,21 +502,32 @@ def _image_planes(values, imager):
     the same in every plane, so it cancels in the ratios the reduction
     measures (phases, hence B and v), and that of the differences is relative
     to the differences, which are small.  `BandLimitedImager` forms the
-    differences block by block (never a whole difference plane).
+    differences block by block (never a whole difference plane) and reads
+    deferred planes (`~gongsynth.stages.scene.scene.DeferredStack`) the same way.
     """
     out = np.empty((values.shape[0],) + imager.detector_shape)
+    streamed = isinstance(imager, BandLimitedImager)
     if imager.dtype != np.float32 or values.shape[0] < 2:
-        for i, plane in enumerate(values):
-            out[i] = imager(plane)
+        for i in range(values.shape[0]):
+            out[i] = imager(values[i] if streamed else np.asarray(values[i]))
         return out
-    common = values[0]
+    common = values[0] if streamed else np.asarray(values[0])
     out[0] = imager(common)
     for i in range(1, values.shape[0]):
-        if isinstance(imager, BandLimitedImager):
-            out[i] = imager(values[i], minus=common)
-        else:
-            out[i] = imager(values[i] - common)
+        out[i] = imager(values[i], minus=common) if streamed else imager(np.asarray(values[i]) - common)
         out[i] += out[0]
+    return out
+
+
+def _pixel_means(plane, factor):
+    """Means over factor × factor blocks of a plane (an array or deferred), read a block of rows at a time."""
+    ny, nx = plane.shape
+    out = np.empty((ny // factor, nx // factor))
+    step = factor * max(1, 256 // factor)
+    for r0 in range(0, ny, step):
+        rows = np.asarray(plane[r0:r0 + step])
+        out[r0 // factor:(r0 + rows.shape[0]) // factor] = rows.reshape(
+            -1, factor, nx // factor, factor).mean(axis=(1, 3), dtype=np.float64)
     return out
 
 
@@ -527,7 +538,9 @@ def image_scene(light, truth=None, instrument=None, *, psf=True, seeing=True, wo
 
     The same as `expected_counts` for ``light`` and `observe` (``psf=False``,
     then ``psf``) for ``truth``, but the PSF operator (its transfer function)
-    is built once and shared by the light planes and the truth.
+    is built once and shared by the light planes and the truth, and deferred
+    scenes (`~gongsynth.stages.scene.scene.DeferredStack`) are read a block of
+    rows at a time, never made whole.
 
     Parameters
     ----------
@@ -553,9 +566,16 @@ def image_scene(light, truth=None, instrument=None, *, psf=True, seeing=True, wo
         The truth averaged over each detector pixel, without and with the PSF.
     """
     inst = resolve_instrument(instrument if instrument is not None else getattr(light, "instrument", None))
-    radiance = check_quantity(light.data, u.erg / (u.s * u.cm**2 * u.arcsec**2), "light.data")
+    unit = u.erg / (u.s * u.cm**2 * u.arcsec**2)
+    values = getattr(light, "planes", None)
+    if isinstance(values, DeferredStack):  # made from checked (finite) input
+        radiance_unit = values.unit
+        if not u.Unit(radiance_unit).is_equivalent(unit):
+            raise u.UnitsError(f"light.data must be in {unit}, got {radiance_unit}")
+    else:
+        radiance = check_quantity(light.data, unit, "light.data")
+        values, radiance_unit = _check_stack(radiance.value, "light.data"), radiance.unit
     kernel = _resolve_kernel(psf, seeing, light.pixel_scale.to_value(u.arcsec), inst)
-    values = _check_stack(radiance.value, "light.data")
     imager = None if kernel is None else _imager(values.shape[-2:], light.pixel_scale, inst, kernel,
                                                  light.boundary, values.dtype, workers,
                                                  _band_limited(band_limited, psf, inst))
@@ -564,17 +584,33 @@ def image_scene(light, truth=None, instrument=None, *, psf=True, seeing=True, wo
                                  band_limited=band_limited)
     else:
         planes = _image_planes(values, imager)
-        counts = _counts(u.Quantity(planes, radiance.unit, copy=False), inst, values.dtype)
+        counts = _counts(u.Quantity(planes, radiance_unit, copy=False), inst, values.dtype)
+    if isinstance(values, DeferredStack):
+        values.release()
     if truth is None:
         return counts, None, None
+    truth_shape = getattr(truth, "planes", truth.data).shape
+    truth_values = getattr(truth, "planes", None)
+    if not isinstance(truth_values, DeferredStack) or truth_values.ndim != 2:
+        truth_values = None
     periodic = truth.boundary == "periodic"
-    truth_map = pixelize(truth.data, truth.pixel_scale, instrument=inst, periodic=periodic)
+    factor = inst.supersampling
+    exact_grid = (truth_values is not None and imager is not None and truth_shape == values.shape[-2:]
+                  and truth.pixel_scale == light.pixel_scale)
+    if exact_grid:
+        truth_map = u.Quantity(_pixel_means(truth_values.plane(), factor), truth_values.unit)
+    else:
+        truth_map = pixelize(truth.data, truth.pixel_scale, instrument=inst, periodic=periodic)
     if kernel is None:
         return counts, truth_map, truth_map.copy()
-    if imager is None or truth.data.shape != values.shape[-2:] or truth.boundary != light.boundary:
+    if imager is None or truth_shape != values.shape[-2:] or truth.boundary != light.boundary:
         truth_psf = observe(truth.data, truth.pixel_scale, instrument=inst, psf=psf, seeing=seeing,
                             boundary=truth.boundary, workers=workers, band_limited=band_limited)
+    elif exact_grid and isinstance(imager, BandLimitedImager):
+        truth_psf = u.Quantity(imager(truth_values.plane()), truth_values.unit)
     else:
         data, unit = _split_unit(truth.data, "truth.data")
         truth_psf = _with_unit(imager(_check_stack(data, "truth.data")), unit)
+    if truth_values is not None:
+        truth_values.release()
     return counts, truth_map, truth_psf
