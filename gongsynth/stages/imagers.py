@@ -36,7 +36,7 @@ import scipy.fft
 
 from gongsynth.stages.psf import fft_workers, wrapped_kernel
 
-__all__ = ["BandLimitedImager", "ExactImager"]
+__all__ = ["BandLimitedImager", "ExactImager", "image_planes", "pixel_means"]
 
 # Rows of a plane transformed at once by `BandLimitedImager` (bounded temporaries).
 _BLOCK_ROWS = 128
@@ -139,8 +139,8 @@ class BandLimitedImager:
     Examples
     --------
     >>> import numpy as np
-    >>> imager = BandLimitedImager((50, 50), np.ones((3, 3)) / 9, "reflect", 5, np.float64, 1)
-    >>> out = imager(np.full((50, 50), 2.0))
+    >>> imager = BandLimitedImager((50, 50), np.ones((3, 3)) / 9, "periodic", 5, np.float64, 1)
+    >>> out = imager(np.full((50, 50), 2.0))   # a constant is all at frequency zero
     >>> out.shape, bool(np.allclose(out, 2.0))
     ((10, 10), True)
     """
@@ -362,3 +362,78 @@ class ExactImager:
         del folded
         fine = scipy.fft.irfft(rows, n=self.fshape[1], axis=1, workers=self.workers)[:, left:left + nx]
         return fine.reshape(ndy, ndx, factor).sum(axis=2, dtype=np.float64) + level
+
+
+def image_planes(values, imager):
+    """
+    A stack (k, ny, nx) through ``imager``, plane by plane.
+
+    In float32 the first plane and each other plane's difference from it are
+    transformed separately: the round-off of the first plane's transform is
+    the same in every plane, so it cancels in the ratios the reduction
+    measures (phases, hence B and v), and that of the differences is relative
+    to the differences, which are small.  `BandLimitedImager` forms the
+    differences block by block (never a whole difference plane) and reads
+    deferred planes (`~gongsynth.stages.scene.scene.DeferredStack`) the same way.
+
+    Parameters
+    ----------
+    values : `numpy.ndarray` or `~gongsynth.stages.scene.scene.DeferredStack`
+        (k, ny, nx); ``values[i]`` is plane i.
+    imager : `BandLimitedImager` or `ExactImager`
+
+    Returns
+    -------
+    `numpy.ndarray`
+        (k, ny // factor, nx // factor) float64.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> imager = BandLimitedImager((50, 50), np.ones((3, 3)) / 9, "reflect", 5, np.float32, 1)
+    >>> image_planes(np.ones((2, 50, 50), dtype=np.float32), imager).shape
+    (2, 10, 10)
+    """
+    out = np.empty((values.shape[0],) + imager.detector_shape)
+    streamed = isinstance(imager, BandLimitedImager)
+    if imager.dtype != np.float32 or values.shape[0] < 2:
+        for i in range(values.shape[0]):
+            out[i] = imager(values[i] if streamed else np.asarray(values[i]))
+        return out
+    common = values[0] if streamed else np.asarray(values[0])
+    out[0] = imager(common)
+    for i in range(1, values.shape[0]):
+        out[i] = imager(values[i], minus=common) if streamed else imager(np.asarray(values[i]) - common)
+        out[i] += out[0]
+    return out
+
+
+def pixel_means(plane, factor):
+    """
+    Means over factor × factor blocks of a plane, read a block of rows at a time.
+
+    Parameters
+    ----------
+    plane : `numpy.ndarray` or `~gongsynth.stages.scene.scene.DeferredPlane`
+        (ny, nx), both multiples of ``factor``.
+    factor : int
+
+    Returns
+    -------
+    `numpy.ndarray`
+        (ny // factor, nx // factor) float64.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> pixel_means(np.arange(16.0).reshape(4, 4), 2).tolist()
+    [[2.5, 4.5], [10.5, 12.5]]
+    """
+    ny, nx = plane.shape
+    out = np.empty((ny // factor, nx // factor))
+    step = factor * max(1, 256 // factor)
+    for r0 in range(0, ny, step):
+        rows = np.asarray(plane[r0:r0 + step])
+        out[r0 // factor:(r0 + rows.shape[0]) // factor] = rows.reshape(
+            -1, factor, nx // factor, factor).mean(axis=(1, 3), dtype=np.float64)
+    return out

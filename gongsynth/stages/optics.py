@@ -23,7 +23,7 @@ import scipy.fft
 import scipy.sparse
 
 from gongsynth.instrument import resolve_instrument
-from gongsynth.stages.imagers import BandLimitedImager, ExactImager
+from gongsynth.stages.imagers import BandLimitedImager, ExactImager, image_planes, pixel_means
 from gongsynth.stages.psf import (
     fft_workers,
     normalize_kernel,
@@ -493,44 +493,6 @@ def _counts(planes, inst, dtype):
     return counts
 
 
-def _image_planes(values, imager):
-    """
-    A stack (k, ny, nx) through ``imager``, plane by plane.
-
-    In float32 the first plane and each other plane's difference from it are
-    transformed separately: the round-off of the first plane's transform is
-    the same in every plane, so it cancels in the ratios the reduction
-    measures (phases, hence B and v), and that of the differences is relative
-    to the differences, which are small.  `BandLimitedImager` forms the
-    differences block by block (never a whole difference plane) and reads
-    deferred planes (`~gongsynth.stages.scene.scene.DeferredStack`) the same way.
-    """
-    out = np.empty((values.shape[0],) + imager.detector_shape)
-    streamed = isinstance(imager, BandLimitedImager)
-    if imager.dtype != np.float32 or values.shape[0] < 2:
-        for i in range(values.shape[0]):
-            out[i] = imager(values[i] if streamed else np.asarray(values[i]))
-        return out
-    common = values[0] if streamed else np.asarray(values[0])
-    out[0] = imager(common)
-    for i in range(1, values.shape[0]):
-        out[i] = imager(values[i], minus=common) if streamed else imager(np.asarray(values[i]) - common)
-        out[i] += out[0]
-    return out
-
-
-def _pixel_means(plane, factor):
-    """Means over factor × factor blocks of a plane (an array or deferred), read a block of rows at a time."""
-    ny, nx = plane.shape
-    out = np.empty((ny // factor, nx // factor))
-    step = factor * max(1, 256 // factor)
-    for r0 in range(0, ny, step):
-        rows = np.asarray(plane[r0:r0 + step])
-        out[r0 // factor:(r0 + rows.shape[0]) // factor] = rows.reshape(
-            -1, factor, nx // factor, factor).mean(axis=(1, 3), dtype=np.float64)
-    return out
-
-
 def image_scene(light, truth=None, instrument=None, *, psf=True, seeing=True, workers=None,
                 band_limited=True):
     """
@@ -583,7 +545,7 @@ def image_scene(light, truth=None, instrument=None, *, psf=True, seeing=True, wo
         counts = expected_counts(light, inst, psf=psf, seeing=seeing, workers=workers,
                                  band_limited=band_limited)
     else:
-        planes = _image_planes(values, imager)
+        planes = image_planes(values, imager)
         counts = _counts(u.Quantity(planes, radiance_unit, copy=False), inst, values.dtype)
     if isinstance(values, DeferredStack):
         values.release()
@@ -598,7 +560,7 @@ def image_scene(light, truth=None, instrument=None, *, psf=True, seeing=True, wo
     exact_grid = (truth_values is not None and imager is not None and truth_shape == values.shape[-2:]
                   and truth.pixel_scale == light.pixel_scale)
     if exact_grid:
-        truth_map = u.Quantity(_pixel_means(truth_values.plane(), factor), truth_values.unit)
+        truth_map = u.Quantity(pixel_means(truth_values.plane(), factor), truth_values.unit)
     else:
         truth_map = pixelize(truth.data, truth.pixel_scale, instrument=inst, periodic=periodic)
     if kernel is None:
