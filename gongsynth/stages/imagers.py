@@ -400,7 +400,7 @@ def image_planes(values, imager):
         for i in range(values.shape[0]):
             out[i] = imager(values[i] if streamed else np.asarray(values[i]))
         return out
-    common = values[0] if streamed else np.asarray(values[0])
+    common = np.asarray(values[0])  # held: read once per other plane
     out[0] = imager(common)
     for i in range(1, values.shape[0]):
         out[i] = imager(values[i], minus=common) if streamed else imager(np.asarray(values[i]) - common)

@@ -91,18 +91,37 @@ def _quadrants(shape, resolutions, detector_shape):
     return [(r, c, m) for (r, c), m in zip(spans, resolutions)]
 
 
-@numba.njit(parallel=True, cache=True)
-def _sparse_rows(indptr, indices, weights, first, narrow, out):
-    """``out[r] = Σ_k weights[k] narrow[indices[k]]`` over CSR row ``first + r`` (float64 sums)."""
-    for r in numba.prange(out.shape[0]):
-        row = np.zeros(out.shape[1])
-        for k in range(indptr[first + r], indptr[first + r + 1]):
-            w = weights[k]
-            src = narrow[indices[k]]
-            for c in range(out.shape[1]):
-                row[c] += w * src[c]
+@numba.njit(inline="always", cache=True)
+def _sparse_row(indptr, indices, weights, first, narrow, out, r, row):
+    """``out[r] = Σ_k weights[k] narrow[indices[k]]`` over CSR row ``first + r`` (sums in ``row``)."""
+    row[:] = 0.0
+    for k in range(indptr[first + r], indptr[first + r + 1]):
+        w = weights[k]
+        src = narrow[indices[k]]
         for c in range(out.shape[1]):
-            out[r, c] = row[c]
+            row[c] += w * src[c]
+    for c in range(out.shape[1]):
+        out[r, c] = row[c]
+
+
+@numba.njit(cache=True)
+def _sparse_rows(indptr, indices, weights, first, narrow, out):
+    """`_sparse_row` for every row of ``out``, on one thread: for the optics' blocks of rows."""
+    row = np.empty(out.shape[1])
+    for r in range(out.shape[0]):
+        _sparse_row(indptr, indices, weights, first, narrow, out, r, row)
+
+
+@numba.njit(parallel=True, cache=True)
+def _sparse_rows_parallel(indptr, indices, weights, first, narrow, out):
+    """`_sparse_row` for every row of ``out``, in parallel: for whole planes (few long calls)."""
+    for r in numba.prange(out.shape[0]):
+        _sparse_row(indptr, indices, weights, first, narrow, out, r, np.empty(out.shape[1]))
+
+
+# Below this many rows a call runs on one thread: the threads' start and join (and, on a
+# loaded machine, their waiting for each other) cost more than the work.
+_PARALLEL_ROWS = 1024
 
 
 class _Tiler:
@@ -145,8 +164,9 @@ class _Tiler:
         for (rows, cols, opy, _), narrow in zip(self.regions, self._narrow_of(i)):
             lo, hi = max(start, rows.start), min(stop, rows.stop)
             if lo < hi:
-                _sparse_rows(opy.indptr, opy.indices, opy.data, lo - rows.start, narrow,
-                             out[lo - start:hi - start, cols])
+                kernel = _sparse_rows_parallel if hi - lo >= _PARALLEL_ROWS else _sparse_rows
+                kernel(opy.indptr, opy.indices, opy.data, lo - rows.start, narrow,
+                       out[lo - start:hi - start, cols])
         return out
 
     def release(self):
