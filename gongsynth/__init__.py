@@ -20,6 +20,7 @@ from gongsynth.products.maps import GONGSynthMap  # registers the map source wit
 from gongsynth.stages import filters, reduction
 from gongsynth.sun import photosphere, rt
 from gongsynth.sun.atmosphere import Atmosphere
+from gongsynth.sun.model_atmosphere import model_atmosphere
 from gongsynth.sun.stokes import StokesCube
 from gongsynth.version import version as __version__
 
@@ -36,5 +37,6 @@ for _name, _module in {"filters": filters, "reduction": reduction, "compare": co
 del _name, _module
 
 __all__ = ["Atmosphere", "GONGInstrument", "GONGSynthMap", "SimulationResult", "StokesCube", "calibrate",
-           "calibration", "compare", "filters", "load_observation", "photosphere", "reduction", "rt",
+           "calibration", "compare", "filters", "load_observation", "model_atmosphere",
+           "photosphere", "reduction", "rt",
            "simulate", "simulate_many", "weak_flux_factor", "__citation__", "__version__"]
