@@ -10,7 +10,8 @@ a stage for their own:
 >>> import astropy.units as u
 >>> from gongsynth.config import SimulationConfig
 >>> config = SimulationConfig(seed=1, detector_shape=16, resolutions=(1,), duration=1 * u.min,
-...                           photosphere_shape=(64, 64), photosphere_pixel_size=1536 * u.km)
+...                           photosphere_shape=(64, 64), photosphere_pixel_size=1536 * u.km,
+...                           sun="milne-eddington")
 >>> chain = build_chain(config)
 >>> chain.names
 ('photosphere', 'synthesis', 'channels', 'scene', 'optics', 'camera', 'reduction', 'maps')

@@ -90,8 +90,9 @@ def build_parser():
     sim.add_argument("--workers", type=_number(int, minimum=1), metavar="N",
                      help="parallel workers: threads for one run, Dask workers for a sweep")
     sim.add_argument("--sun", choices=tuple(SUNS),
-                     help="the built-in Sun: Milne-Eddington columns (fast, the default) or the 3-D "
-                          "model atmosphere through LTE radiative transfer")
+                     help="the built-in Sun: the 3-D model atmosphere through LTE radiative transfer "
+                          "(default in tiled mode) or Milne-Eddington columns (fast, a toy for calibration; "
+                          "the default over the full disk)")
     sim.add_argument("--atmosphere", type=Path, metavar="PATH",
                      help="a model atmosphere as the input Sun, synthesised by LTE radiative transfer: "
                           "a MURaM snapshot folder, a gongsynth or ART HDF5 file (.h5), or a 1-D model "

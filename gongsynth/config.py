@@ -31,8 +31,8 @@ from gongsynth.sun.model_atmosphere import model_atmosphere
 from gongsynth.sun.photosphere import model_photosphere
 from gongsynth.tomlfmt import toml_table
 
-__all__ = ["SimulationConfig", "Effects", "ENGINES", "MODES", "SUNS", "DEFAULT_OBSTIME", "IN_MEMORY",
-           "fingerprint", "photosphere_defaults"]
+__all__ = ["SimulationConfig", "Effects", "ENGINES", "MODES", "SUNS", "RUN_GRIDS", "default_sun",
+           "DEFAULT_OBSTIME", "IN_MEMORY", "fingerprint", "photosphere_defaults"]
 
 #: Scene modes accepted by `SimulationConfig.mode`.
 MODES = ("tiled", "full-disk")
@@ -45,6 +45,14 @@ IN_MEMORY = "<array>"
 #: Milne-Eddington column photosphere (fast; a toy for calibration: one line strength
 #: everywhere) and the 3-D model atmosphere synthesised by LTE radiative transfer.
 SUNS = {"milne-eddington": model_photosphere, "model-atmosphere": model_atmosphere}
+
+#: A run's default grid of a built-in Sun where it differs from the builder's.  The 3-D Sun's radiative
+#: transfer takes minutes at its builder's 1024² columns of 96 km; a run covers the same 98 Mm box
+#: (the papers' area, with room for the sunspot) with 256² columns of 384 km, which keeps the default
+#: run under a minute.  The weak-flux factor depends on the box's area, not on the column size: seeds 1
+#: and 2 give 1.23 / 1.00 at 0° / 60° with 384 km columns, 1.25 / 1.00 with 192 km and 1.22 / 0.99
+#: with 96 km, whereas a 25 Mm box of 96 km columns gives 1.06 / 0.69.
+RUN_GRIDS = {"model-atmosphere": {"shape": (256, 256), "pixel_size": 384 * u.km}}
 
 #: Arguments of the built-in Suns set by [simulation] instead of [photosphere].
 _PHOTOSPHERE_RUN_KEYS = ("shape", "pixel_size", "seed")
@@ -148,7 +156,33 @@ class Effects:
         return cls(**table)
 
 
-def photosphere_defaults(sun="milne-eddington"):
+def default_sun(mode="tiled"):
+    """
+    The built-in Sun a run uses when none is named: the 3-D model atmosphere in
+    tiled mode; the Milne-Eddington columns over the full disk (the 3-D Sun
+    is not mapped over the disk yet).
+
+    Parameters
+    ----------
+    mode : str
+        A member of `MODES`.
+
+    Returns
+    -------
+    str
+        A key of `SUNS`.
+
+    Examples
+    --------
+    >>> default_sun(), default_sun("full-disk")
+    ('model-atmosphere', 'milne-eddington')
+    """
+    if mode not in MODES:
+        raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
+    return "milne-eddington" if mode == "full-disk" else "model-atmosphere"
+
+
+def photosphere_defaults(sun="model-atmosphere"):
     """
     The knobs of a built-in Sun that ``[photosphere]`` sets, with their defaults.
 
@@ -166,9 +200,9 @@ def photosphere_defaults(sun="milne-eddington"):
 
     Examples
     --------
-    >>> photosphere_defaults()["umbra_field"]
+    >>> photosphere_defaults("milne-eddington")["umbra_field"]
     <Quantity 3000. G>
-    >>> photosphere_defaults("model-atmosphere")["element_field"]
+    >>> photosphere_defaults()["element_field"]
     <Quantity 1500. G>
     """
     if sun not in SUNS:
@@ -178,8 +212,8 @@ def photosphere_defaults(sun="milne-eddington"):
 
 
 def _sun_default(sun, name):
-    """The default ``shape`` or ``pixel_size`` of a built-in Sun's builder."""
-    return inspect.signature(SUNS[sun]).parameters[name].default
+    """A run's default ``shape`` or ``pixel_size`` of a built-in Sun (`RUN_GRIDS`, else the builder's)."""
+    return RUN_GRIDS.get(sun, {}).get(name, inspect.signature(SUNS[sun]).parameters[name].default)
 
 
 def _same(a, b):
@@ -190,7 +224,7 @@ def _same(a, b):
         return False
 
 
-def _photosphere_knobs(values, sun="milne-eddington", where="photosphere"):
+def _photosphere_knobs(values, sun="model-atmosphere", where="photosphere"):
     """
     The knobs of ``values`` that differ from ``sun``'s defaults, each checked against
     its default's type and unit (the builder fills in the rest).
@@ -280,10 +314,12 @@ class SimulationConfig:
         Tile magnifications of the quadrants in tiled mode.
     obstime : str
         ISO time of the observation.
-    sun : str
-        The built-in Sun (a key of `SUNS`): ``"milne-eddington"`` (the column
-        photosphere, fast; default) or ``"model-atmosphere"`` (the 3-D model
-        atmosphere through LTE radiative transfer; tiled mode only).
+    sun : str or None
+        The built-in Sun (a key of `SUNS`): ``"model-atmosphere"`` (the 3-D
+        model atmosphere through LTE radiative transfer; tiled mode only) or
+        ``"milne-eddington"`` (the column photosphere: fast, one line strength
+        everywhere, a toy for calibration).  None (default): the mode's
+        default, `default_sun` (recorded).
     photosphere_shape : tuple of int or None
         Columns of the built-in Sun; None: that Sun's default (recorded).
     photosphere_pixel_size : `~astropy.units.Quantity` or None
@@ -324,7 +360,7 @@ class SimulationConfig:
     detector_shape: int | None = None
     resolutions: tuple = (1, 2, 4, 8)
     obstime: str = DEFAULT_OBSTIME
-    sun: str = "milne-eddington"
+    sun: str | None = None
     photosphere_shape: tuple | None = None
     photosphere_pixel_size: u.Quantity | None = None
     workers: int | None = None
@@ -338,6 +374,8 @@ class SimulationConfig:
     instrument: GONGInstrument = field(default_factory=GONGInstrument)
 
     def __post_init__(self):
+        if self.sun is None and self.mode in MODES:
+            object.__setattr__(self, "sun", default_sun(self.mode))
         if self.sun not in SUNS:
             raise ValueError(f"sun must be one of {tuple(SUNS)}, got {self.sun!r}")
         if self.sun == "model-atmosphere" and self.mode == "full-disk":
@@ -422,9 +460,11 @@ class SimulationConfig:
         """
         Return a copy with some fields changed (validated again).
 
-        A change of ``sun`` also moves ``photosphere_shape`` and
-        ``photosphere_pixel_size`` to the new Sun's defaults where they held the
-        old Sun's defaults (and were not changed too).
+        A change of ``mode`` moves ``sun`` to the new mode's default where it
+        held the old mode's (and was not changed too).  A change of ``sun``
+        also moves ``photosphere_shape`` and ``photosphere_pixel_size`` to the
+        new Sun's defaults where they held the old Sun's defaults (and were
+        not changed too).
 
         Parameters
         ----------
@@ -435,6 +475,8 @@ class SimulationConfig:
         -------
         `SimulationConfig`
         """
+        if "mode" in changes and "sun" not in changes and self.sun == default_sun(self.mode):
+            changes["sun"] = None      # the mode's default Sun follows the mode
         if changes.get("sun", self.sun) != self.sun:
             for name, key in (("photosphere_shape", "shape"), ("photosphere_pixel_size", "pixel_size")):
                 if name not in changes and _same(getattr(self, name), _sun_default(self.sun, key)):

@@ -52,8 +52,8 @@ def test_console_script_runs():
 def test_effect_switches_and_obstime_reach_the_saved_config(tmp_path):
     import astropy.units as u
 
-    cfg = SimulationConfig(seed=1, detector_shape=16, resolutions=(1,), duration=1 * u.min,
-                           photosphere_shape=(64, 64), photosphere_pixel_size=1536 * u.km)
+    cfg = SimulationConfig(seed=1, sun="milne-eddington", detector_shape=16, resolutions=(1,),
+                           duration=1 * u.min, photosphere_shape=(64, 64), photosphere_pixel_size=1536 * u.km)
     path = tmp_path / "run.toml"
     path.write_text(cfg.to_toml())
     out = tmp_path / "o"
