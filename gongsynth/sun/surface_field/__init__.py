@@ -13,5 +13,6 @@ The large-scale field of the whole Sun: B_r on a Carrington grid, from a real ma
 """
 from gongsynth.sun.surface_field.maps import fill_unobserved, surface_field_at
 from gongsynth.sun.surface_field.observed import surface_field_from_map
+from gongsynth.sun.surface_field.synthetic import synthetic_surface_field
 
-__all__ = ["surface_field_from_map", "surface_field_at", "fill_unobserved"]
+__all__ = ["surface_field_from_map", "synthetic_surface_field", "surface_field_at", "fill_unobserved"]
