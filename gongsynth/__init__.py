@@ -38,5 +38,5 @@ del _name, _module
 
 __all__ = ["Atmosphere", "GONGInstrument", "GONGSynthMap", "SimulationResult", "StokesCube", "calibrate",
            "calibration", "compare", "filters", "load_observation", "photosphere", "reduction", "rt",
-           "simulate", "simulate_many", "surface_field_from_map", "synthetic_surface_field", "weak_flux_factor",
-           "__citation__", "__version__"]
+           "simulate", "simulate_many", "surface_field_from_map", "synthetic_surface_field",
+           "weak_flux_factor", "__citation__", "__version__"]
