@@ -9,7 +9,6 @@ Sun chosen by ``sun`` (``[photosphere]``) and a `~gongsynth.GONGInstrument`
 that name the key.
 """
 import dataclasses
-import hashlib
 import inspect
 import numbers
 import tomllib
@@ -21,9 +20,11 @@ import numpy as np
 import tomlkit
 from astropy.time import Time
 
+from gongsynth.files import fingerprint
 from gongsynth.geometry import DEFAULT_OBSTIME as _DEFAULT_TIME
 from gongsynth.geometry import Pointing
 from gongsynth.instrument import GONGInstrument
+from gongsynth.observing import GONG_SITES, check_site, like_gong
 from gongsynth.seeding import root_seed
 from gongsynth.stages.camera.integrate import ENGINES
 from gongsynth.stages.camera.schedule import n_frames_in
@@ -70,6 +71,8 @@ _DOCS = {
     "flat_sha256": "SHA-256 of that flat, checked when the run is repeated",
     "dark_file": "a user-supplied dark: its FITS path, or '<array>' (unset: the synthetic dark)",
     "dark_sha256": "SHA-256 of that dark, checked when the run is repeated",
+    "site": f"the observer's ground site, a GONG site {sorted(GONG_SITES)}; unset: the Earth's centre",
+    "like": "a real GONG full-disk FITS file whose date, site and plate scale the run takes",
 }
 
 
@@ -224,38 +227,6 @@ def _is_int(value):
     return isinstance(value, numbers.Integral) and not isinstance(value, bool)
 
 
-def fingerprint(data):
-    """
-    SHA-256 of a detector map given as a FITS path or an array (values and unit).
-
-    Parameters
-    ----------
-    data : path-like, array_like or `~astropy.units.Quantity`
-
-    Returns
-    -------
-    str
-        Hex digest.
-
-    Examples
-    --------
-    >>> fingerprint([1.0, 2.0]) == fingerprint(np.array([1.0, 2.0]))
-    True
-    """
-    digest = hashlib.sha256()
-    if isinstance(data, (str, Path)):
-        with open(data, "rb") as handle:
-            for block in iter(lambda: handle.read(1 << 20), b""):
-                digest.update(block)
-        return digest.hexdigest()
-    unit = data.unit.to_string() if isinstance(data, u.Quantity) else ""
-    values = np.ascontiguousarray(u.Quantity(data).value if unit else np.asarray(data), dtype=np.float64)
-    digest.update(repr(values.shape).encode())
-    digest.update(values.tobytes())
-    digest.update(unit.encode())
-    return digest.hexdigest()
-
-
 @dataclass(frozen=True)
 class SimulationConfig:
     """
@@ -304,6 +275,11 @@ class SimulationConfig:
         was passed as an array (None: the instrument's synthetic one).
     flat_sha256, dark_sha256 : str or None
         Their `fingerprint`, checked when the run is repeated.
+    site : str or None
+        The observer's GONG site code (``"BB"``: Big Bear); None: the Earth's centre.
+    like : str or None
+        A real GONG file whose date, site and plate scale the run took (see
+        `gongsynth.observing.like_gong`; keys given explicitly win).
     instrument : `~gongsynth.GONGInstrument`
         The instrument.
 
@@ -335,6 +311,8 @@ class SimulationConfig:
     flat_sha256: str | None = None
     dark_file: str | None = None
     dark_sha256: str | None = None
+    site: str | None = None
+    like: str | None = None
     instrument: GONGInstrument = field(default_factory=GONGInstrument)
 
     def __post_init__(self):
@@ -383,6 +361,9 @@ class SimulationConfig:
         if not isinstance(self.effects, Effects):
             raise TypeError(f"effects must be an Effects, got {type(self.effects).__name__}")
         object.__setattr__(self, "photosphere", _photosphere_knobs(dict(self.photosphere), self.sun))
+        object.__setattr__(self, "site", check_site(self.site))
+        if self.like is not None and not isinstance(self.like, str):
+            raise TypeError(f"like must be the path of a GONG FITS file or None, got {self.like!r}")
         for name in ("flat", "dark"):
             path, digest = getattr(self, f"{name}_file"), getattr(self, f"{name}_sha256")
             if (path is None) != (digest is None):
@@ -554,8 +535,11 @@ class SimulationConfig:
         for name in ("resolutions", "photosphere_shape"):
             if name in sim:
                 sim[name] = tuple(sim[name])
-        return cls(instrument=GONGInstrument.from_dict(table.get("instrument", {})),
-                   effects=Effects.from_dict(table.get("effects", {})),
+        instrument = GONGInstrument.from_dict(table.get("instrument", {}))
+        if sim.get("like") is not None:
+            sim, instrument = like_gong(sim["like"], settings=sim, instrument=instrument,
+                                        fixed_plate_scale="plate_scale" in table.get("instrument", {}))
+        return cls(instrument=instrument, effects=Effects.from_dict(table.get("effects", {})),
                    photosphere=table.get("photosphere", {}), **sim)
 
 

@@ -22,7 +22,7 @@ PACKAGE = Path(gongsynth.__file__).parent
 LAYERS = (
     ("gongsynth.version", "gongsynth._version", "gongsynth.optional", "gongsynth.validation",
      "gongsynth.seeding", "gongsynth.planes", "gongsynth.files", "gongsynth.tomlfmt",
-     "gongsynth.instrument", "gongsynth.geometry"),
+     "gongsynth.instrument", "gongsynth.geometry", "gongsynth.observing"),
     ("gongsynth.sun.rt.atomic_data", "gongsynth.sun.rt.eos", "gongsynth.sun.rt.opacity",
      "gongsynth.sun.rt.hydrostatic"),
     ("gongsynth.sun", "gongsynth.sun.atmosphere_files", "gongsynth.sun.atmosphere",
