@@ -52,8 +52,8 @@ import numpy as np
 from astropy.time import Time
 from scipy.optimize import brentq, minimize_scalar
 
-__all__ = ["CYCLES", "SolarCycle", "cycle_of", "sunspot_number", "active_latitude", "leading_polarity",
-           "joy_tilt", "polar_field"]
+__all__ = ["CYCLES", "ZONE_WIDTH", "JOY_AMPLITUDE", "JOY_SCATTER", "SolarCycle", "cycle_of", "sunspot_number",
+           "active_latitude", "leading_polarity", "joy_tilt", "polar_field"]
 
 #: (cycle, start of cycle at minimum [decimal year], smoothed maximum [SILSO v2]);
 #: cycle 25's maximum is provisional, cycle 26's start assumed.
@@ -65,8 +65,12 @@ _MEAN_PEAK = 180.0  # v2, extrapolation
 _V1_PER_V2 = 0.6  # Clette et al. 2014
 _C = 0.8
 _ZONE_START, _ZONE_FOLD = 28.0, 90.0 / 12.0  # deg, years (Hathaway 2011)
-ZONE_WIDTH = 6.0  # deg, assumed
-JOY_AMPLITUDE, JOY_SCATTER = 32.1, 15.0  # deg (Stenflo & Kosovichev 2012), deg (assumed)
+#: Standard deviation (deg) of emergence latitudes about the sunspot zone's centroid (assumed).
+ZONE_WIDTH = 6.0
+#: Joy's law amplitude (deg): mean tilt 32.1° sin|latitude| (Stenflo & Kosovichev 2012).
+JOY_AMPLITUDE = 32.1
+#: Scatter (deg) of tilts about Joy's law (assumed).
+JOY_SCATTER = 15.0
 
 
 def _start(n):
