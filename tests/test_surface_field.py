@@ -177,14 +177,29 @@ def test_polar_field_sign_follows_the_cycle(date, north):
         assert 3 < abs(north_cap) < 10
 
 
+def _adapt_map():
+    """Realisation 0 of the ADAPT-GONG map of 2017-07-20 08:00 (1-deg Carrington CAR grid, gauss)."""
+    from astropy.io import fits
+    from sunpy.map.header_helper import make_heliographic_header
+
+    from .realdata import real_file
+
+    data = fits.getdata(real_file("gong/adapt40311_03k012_201707200800_i00015600n1.fts.gz"))[0]
+    date = "2017-07-20T08:00:00"
+    header = make_heliographic_header(date, get_earth(date), data.shape, frame="carrington",
+                                      projection_code="CAR", map_center_longitude=180 * u.deg)
+    return sunpy.map.Map(data, header)
+
+
 @pytest.mark.parametrize("relpath, date", [
     ("gong/mrbqs221029t0304c2263_067.fits", "2022-10-29"),   # cycle 25 before its reversal
     ("mdi/mdi.fd_m_96m_lev182.20101015_000000_TAI.data.fits", "2010-10-15"),  # cycle 24 rising
+    ("adapt", "2017-07-20"),  # cycle 24 declining, after its reversal
 ])
 def test_polar_sign_agrees_with_real_maps(relpath, date):
     # The sign of the model's northern polar field against the real field poleward of 60 deg
     # (a synoptic map's B_r, or the full disk's B_LOS/mu where the north pole is seen).
-    smap = load_real(relpath, "magnetogram")
+    smap = _adapt_map() if relpath == "adapt" else load_real(relpath, "magnetogram")
     real = surface_field_from_map(smap, resolution=1 * u.deg)
     _, lat = field_grid(real.data.shape)
     real_north = np.nanmean(real.data[lat > 60])
