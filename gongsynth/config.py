@@ -9,8 +9,6 @@ Sun chosen by ``sun`` (``[photosphere]``) and a `~gongsynth.GONGInstrument`
 that name the key.
 """
 import dataclasses
-import hashlib
-import inspect
 import numbers
 import tomllib
 from dataclasses import dataclass, field, fields
@@ -24,38 +22,22 @@ from astropy.time import Time
 from gongsynth.geometry import DEFAULT_OBSTIME as _DEFAULT_TIME
 from gongsynth.geometry import Pointing
 from gongsynth.instrument import GONGInstrument
+from gongsynth.observing import GONG_SITES, check_site, like_gong
 from gongsynth.seeding import root_seed
 from gongsynth.stages.camera.integrate import ENGINES
 from gongsynth.stages.camera.schedule import n_frames_in
-from gongsynth.sun.model_atmosphere import model_atmosphere
-from gongsynth.sun.photosphere import model_photosphere
+from gongsynth.suns import DEFAULT_SUNS, SUNS, default_sun, photosphere_defaults, run_grid_default
 from gongsynth.tomlfmt import toml_table
 
-__all__ = ["SimulationConfig", "Effects", "ENGINES", "MODES", "SUNS", "RUN_GRIDS", "default_sun",
-           "DEFAULT_OBSTIME", "IN_MEMORY", "fingerprint", "photosphere_defaults"]
+__all__ = ["SimulationConfig", "Effects", "ENGINES", "MODES", "DEFAULT_OBSTIME", "IN_MEMORY"]
 
 #: Scene modes accepted by `SimulationConfig.mode`.
-MODES = ("tiled", "full-disk")
+MODES = tuple(DEFAULT_SUNS)
 #: Default observation time (B0 ≈ 0), as an ISO string.
 DEFAULT_OBSTIME = _DEFAULT_TIME.isot
 #: The recorded "path" of a flat or dark that was passed as an array.
 IN_MEMORY = "<array>"
 
-#: The built-in Suns (`SimulationConfig.sun`) and the function that builds each: the
-#: Milne-Eddington column photosphere (fast; a toy for calibration: one line strength
-#: everywhere) and the 3-D model atmosphere synthesised by LTE radiative transfer.
-SUNS = {"milne-eddington": model_photosphere, "model-atmosphere": model_atmosphere}
-
-#: A run's default grid of a built-in Sun where it differs from the builder's.  The 3-D Sun's radiative
-#: transfer takes minutes at its builder's 1024² columns of 96 km; a run covers the same 98 Mm box
-#: (the papers' area, with room for the sunspot) with 256² columns of 384 km, which keeps the default
-#: run under a minute.  The weak-flux factor depends on the box's area, not on the column size: seeds 1
-#: and 2 give 1.23 / 1.00 at 0° / 60° with 384 km columns, 1.25 / 1.00 with 192 km and 1.22 / 0.99
-#: with 96 km, whereas a 25 Mm box of 96 km columns gives 1.06 / 0.69.
-RUN_GRIDS = {"model-atmosphere": {"shape": (256, 256), "pixel_size": 384 * u.km}}
-
-#: Arguments of the built-in Suns set by [simulation] instead of [photosphere].
-_PHOTOSPHERE_RUN_KEYS = ("shape", "pixel_size", "seed")
 
 _QUANTITIES = {
     "latitude": (u.deg, "heliographic latitude of the field centre on the central meridian"),
@@ -78,6 +60,8 @@ _DOCS = {
     "flat_sha256": "SHA-256 of that flat, checked when the run is repeated",
     "dark_file": "a user-supplied dark: its FITS path, or '<array>' (unset: the synthetic dark)",
     "dark_sha256": "SHA-256 of that dark, checked when the run is repeated",
+    "site": f"the observer's ground site, a GONG site {sorted(GONG_SITES)}; unset: the Earth's centre",
+    "like": "a real GONG full-disk FITS file whose date, site and plate scale the run takes",
 }
 
 
@@ -156,66 +140,6 @@ class Effects:
         return cls(**table)
 
 
-def default_sun(mode="tiled"):
-    """
-    The built-in Sun a run uses when none is named: the 3-D model atmosphere in
-    tiled mode; the Milne-Eddington columns over the full disk (the 3-D Sun
-    is not mapped over the disk yet).
-
-    Parameters
-    ----------
-    mode : str
-        A member of `MODES`.
-
-    Returns
-    -------
-    str
-        A key of `SUNS`.
-
-    Examples
-    --------
-    >>> default_sun(), default_sun("full-disk")
-    ('model-atmosphere', 'milne-eddington')
-    """
-    if mode not in MODES:
-        raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
-    return "milne-eddington" if mode == "full-disk" else "model-atmosphere"
-
-
-def photosphere_defaults(sun="model-atmosphere"):
-    """
-    The knobs of a built-in Sun that ``[photosphere]`` sets, with their defaults.
-
-    Shape, pixel size and seed are run arguments (``photosphere_shape``,
-    ``photosphere_pixel_size``, ``seed``) and are not among them.
-
-    Parameters
-    ----------
-    sun : str
-        A key of `SUNS`.
-
-    Returns
-    -------
-    dict
-
-    Examples
-    --------
-    >>> photosphere_defaults("milne-eddington")["umbra_field"]
-    <Quantity 3000. G>
-    >>> photosphere_defaults()["element_field"]
-    <Quantity 1500. G>
-    """
-    if sun not in SUNS:
-        raise ValueError(f"sun must be one of {tuple(SUNS)}, got {sun!r}")
-    return {name: p.default for name, p in inspect.signature(SUNS[sun]).parameters.items()
-            if name not in _PHOTOSPHERE_RUN_KEYS}
-
-
-def _sun_default(sun, name):
-    """A run's default ``shape`` or ``pixel_size`` of a built-in Sun (`RUN_GRIDS`, else the builder's)."""
-    return RUN_GRIDS.get(sun, {}).get(name, inspect.signature(SUNS[sun]).parameters[name].default)
-
-
 def _same(a, b):
     """Whether two knob values are equal (Quantities in any equivalent unit)."""
     try:
@@ -256,38 +180,6 @@ def _photosphere_knobs(values, sun="model-atmosphere", where="photosphere"):
 def _is_int(value):
     """An integer (Python or numpy), not a bool."""
     return isinstance(value, numbers.Integral) and not isinstance(value, bool)
-
-
-def fingerprint(data):
-    """
-    SHA-256 of a detector map given as a FITS path or an array (values and unit).
-
-    Parameters
-    ----------
-    data : path-like, array_like or `~astropy.units.Quantity`
-
-    Returns
-    -------
-    str
-        Hex digest.
-
-    Examples
-    --------
-    >>> fingerprint([1.0, 2.0]) == fingerprint(np.array([1.0, 2.0]))
-    True
-    """
-    digest = hashlib.sha256()
-    if isinstance(data, (str, Path)):
-        with open(data, "rb") as handle:
-            for block in iter(lambda: handle.read(1 << 20), b""):
-                digest.update(block)
-        return digest.hexdigest()
-    unit = data.unit.to_string() if isinstance(data, u.Quantity) else ""
-    values = np.ascontiguousarray(u.Quantity(data).value if unit else np.asarray(data), dtype=np.float64)
-    digest.update(repr(values.shape).encode())
-    digest.update(values.tobytes())
-    digest.update(unit.encode())
-    return digest.hexdigest()
 
 
 @dataclass(frozen=True)
@@ -340,6 +232,11 @@ class SimulationConfig:
         was passed as an array (None: the instrument's synthetic one).
     flat_sha256, dark_sha256 : str or None
         Their `fingerprint`, checked when the run is repeated.
+    site : str or None
+        The observer's GONG site code (``"BB"``: Big Bear); None: the Earth's centre.
+    like : str or None
+        A real GONG file whose date, site and plate scale the run took (see
+        `gongsynth.observing.like_gong`; keys given explicitly win).
     instrument : `~gongsynth.GONGInstrument`
         The instrument.
 
@@ -371,6 +268,8 @@ class SimulationConfig:
     flat_sha256: str | None = None
     dark_file: str | None = None
     dark_sha256: str | None = None
+    site: str | None = None
+    like: str | None = None
     instrument: GONGInstrument = field(default_factory=GONGInstrument)
 
     def __post_init__(self):
@@ -382,9 +281,9 @@ class SimulationConfig:
             raise ValueError("sun = 'model-atmosphere' runs in mode = 'tiled' only: the full disk maps the "
                              "'milne-eddington' Sun at every point's viewing angle")
         if self.photosphere_shape is None:
-            object.__setattr__(self, "photosphere_shape", _sun_default(self.sun, "shape"))
+            object.__setattr__(self, "photosphere_shape", run_grid_default(self.sun, "shape"))
         if self.photosphere_pixel_size is None:
-            object.__setattr__(self, "photosphere_pixel_size", _sun_default(self.sun, "pixel_size"))
+            object.__setattr__(self, "photosphere_pixel_size", run_grid_default(self.sun, "pixel_size"))
         for name, (unit, _) in _QUANTITIES.items():
             value = getattr(self, name)
             if not isinstance(value, u.Quantity) or not value.unit.is_equivalent(unit):
@@ -421,6 +320,9 @@ class SimulationConfig:
         if not isinstance(self.effects, Effects):
             raise TypeError(f"effects must be an Effects, got {type(self.effects).__name__}")
         object.__setattr__(self, "photosphere", _photosphere_knobs(dict(self.photosphere), self.sun))
+        object.__setattr__(self, "site", check_site(self.site))
+        if self.like is not None and not isinstance(self.like, str):
+            raise TypeError(f"like must be the path of a GONG FITS file or None, got {self.like!r}")
         for name in ("flat", "dark"):
             path, digest = getattr(self, f"{name}_file"), getattr(self, f"{name}_sha256")
             if (path is None) != (digest is None):
@@ -479,7 +381,7 @@ class SimulationConfig:
             changes["sun"] = None      # the mode's default Sun follows the mode
         if changes.get("sun", self.sun) != self.sun:
             for name, key in (("photosphere_shape", "shape"), ("photosphere_pixel_size", "pixel_size")):
-                if name not in changes and _same(getattr(self, name), _sun_default(self.sun, key)):
+                if name not in changes and _same(getattr(self, name), run_grid_default(self.sun, key)):
                     changes[name] = None
         return dataclasses.replace(self, **changes)
 
@@ -596,8 +498,11 @@ class SimulationConfig:
         for name in ("resolutions", "photosphere_shape"):
             if name in sim:
                 sim[name] = tuple(sim[name])
-        return cls(instrument=GONGInstrument.from_dict(table.get("instrument", {})),
-                   effects=Effects.from_dict(table.get("effects", {})),
+        instrument = GONGInstrument.from_dict(table.get("instrument", {}))
+        if sim.get("like") is not None:
+            sim, instrument = like_gong(sim["like"], settings=sim, instrument=instrument,
+                                        fixed_plate_scale="plate_scale" in table.get("instrument", {}))
+        return cls(instrument=instrument, effects=Effects.from_dict(table.get("effects", {})),
                    photosphere=table.get("photosphere", {}), **sim)
 
 

@@ -15,7 +15,8 @@ import astropy.units as u
 import numpy as np
 
 from gongsynth.chain import build_chain
-from gongsynth.config import IN_MEMORY, Effects, SimulationConfig, fingerprint
+from gongsynth.config import IN_MEMORY, Effects, SimulationConfig
+from gongsynth.files import fingerprint
 from gongsynth.optional import import_optional
 from gongsynth.resources import check_resources
 from gongsynth.sun.atmosphere import Atmosphere
@@ -187,7 +188,7 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="bl
         only), or the column photosphere through Milne-Eddington synthesis
         (fast; one line strength everywhere, a toy for calibration).
         Default: the 3-D model in tiled mode, the columns over the full disk
-        (`gongsynth.config.default_sun`).
+        (`gongsynth.suns.default_sun`).
     photosphere_shape : tuple of int, optional
         Columns of the built-in Sun (default: 1024 × 1024 for
         ``"milne-eddington"``, the model atmosphere's own default otherwise).

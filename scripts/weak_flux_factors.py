@@ -31,9 +31,10 @@ from astropy.table import QTable
 
 import gongsynth
 from gongsynth.analysis.weak_flux import weak_flux_factor_difference
-from gongsynth.config import SUNS, Effects, SimulationConfig
+from gongsynth.config import Effects, SimulationConfig
 from gongsynth.geometry import Pointing
 from gongsynth.seeding import child_sequence
+from gongsynth.suns import SUNS
 
 #: What each ablation of the 3-D Sun switches off: [photosphere] knobs, instrument effects, or the rays.
 ABLATIONS = {

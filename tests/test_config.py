@@ -72,7 +72,7 @@ def test_flat_record_needs_both_path_and_digest():
 def test_the_built_in_sun_and_its_defaults():
     """Shape and spacing default to the chosen Sun's builder; a change of Sun moves them along; the
     default Sun is the 3-D model in tiled mode and the columns over the full disk, and follows the mode."""
-    from gongsynth.config import RUN_GRIDS, SUNS, photosphere_defaults
+    from gongsynth.suns import RUN_GRIDS, SUNS, photosphere_defaults
     default = SimulationConfig(seed=1)
     assert default.sun == "model-atmosphere"
     me = default.replace(sun="milne-eddington")

@@ -222,7 +222,7 @@ def model_atmosphere(shape=(1024, 1024), pixel_size=96 * u.km, *, seed, nz=80,
     shape : tuple of int, optional
         (ny, nx) columns (default 1024 × 1024: 98 Mm, the papers' MURaM box
         binned to 96 km; a run's default is coarser, see
-        `gongsynth.config.RUN_GRIDS`).
+        `gongsynth.suns.RUN_GRIDS`).
     pixel_size : `~astropy.units.Quantity`, optional
         Horizontal spacing (default 96 km).
     seed : int, `numpy.random.SeedSequence` or `numpy.random.Generator`
