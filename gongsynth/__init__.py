@@ -34,8 +34,11 @@ _LAZY = {
     "StokesCube": ("gongsynth.sun.stokes", "StokesCube"),
     "calibrate": ("gongsynth.analysis.apply_calibration", "calibrate"),
     "load_observation": ("gongsynth.analysis.observations", "load_observation"),
+    "model_atmosphere": ("gongsynth.sun.model_atmosphere", "model_atmosphere"),
     "simulate": ("gongsynth.pipeline", "simulate"),
     "simulate_many": ("gongsynth.pipeline", "simulate_many"),
+    "surface_field_from_map": ("gongsynth.sun.surface_field", "surface_field_from_map"),
+    "synthetic_surface_field": ("gongsynth.sun.surface_field", "synthetic_surface_field"),
     "weak_flux_factor": ("gongsynth.analysis.weak_flux", "weak_flux_factor"),
 }
 
@@ -94,5 +97,6 @@ def __dir__():
 
 
 __all__ = ["Atmosphere", "GONGInstrument", "GONGSynthMap", "SimulationResult", "StokesCube", "calibrate",
-           "calibration", "compare", "filters", "load_observation", "photosphere", "reduction", "rt",
-           "simulate", "simulate_many", "weak_flux_factor", "__citation__", "__version__"]
+           "calibration", "compare", "filters", "load_observation", "model_atmosphere",
+           "photosphere", "reduction", "rt", "simulate", "simulate_many", "surface_field_from_map",
+           "synthetic_surface_field", "weak_flux_factor", "__citation__", "__version__"]
