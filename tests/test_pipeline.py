@@ -366,7 +366,7 @@ def test_streamed_chain_equals_the_reference_path():
     from gongsynth.stages.scene.tiled import tile
     from gongsynth.sun.photosphere import synthesize
 
-    cfg = SimulationConfig(seed=4, detector_shape=120, photosphere_shape=(256, 256),
+    cfg = SimulationConfig(seed=4, sun="milne-eddington", detector_shape=120, photosphere_shape=(256, 256),
                            photosphere_pixel_size=384 * u.km, latitude=30 * u.deg)
     state = build_chain(cfg).run(until="optics", progress=False)
     inst, light = cfg.instrument, state["light"]
