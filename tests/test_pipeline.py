@@ -326,7 +326,8 @@ def test_the_model_atmosphere_sun_goes_through_the_radiative_transfer():
                            photosphere={"spot": False}, detector_shape=16, resolutions=(1,),
                            duration=1 * u.min)
     state = build_chain(cfg).run(until="synthesis", progress=False)
-    atm = model_atmosphere((24, 24), seed=child_sequence(4, "photosphere"), spot=False)
+    atm = model_atmosphere((24, 24), cfg.photosphere_pixel_size, seed=child_sequence(4, "photosphere"),
+                           spot=False)
     assert np.array_equal(state["photosphere"].raw("temperature"), atm.raw("temperature"))
     pointing = Pointing(60 * u.deg, cfg.obstime)
     cube = gongsynth.rt.synthesize(atm, mu=pointing.mu, azimuth=pointing.los_azimuth, progress=False)
