@@ -19,6 +19,7 @@ ORDER = [
     "plot_full_disk.py",
     "plot_compare_real.py",
     "plot_latitude_sweep.py",
+    "plot_why_gong_under_measures.py",
 ]
 
 
