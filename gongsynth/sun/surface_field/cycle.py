@@ -169,7 +169,7 @@ class SolarCycle:
 
     def sunspot_number(self, year):
         """
-        Smoothed sunspot number (v2) contributed by this cycle at decimal ``year``(s).
+        Smoothed sunspot number (v2) contributed by this cycle at decimal ``year`` (one or many).
 
         Parameters
         ----------
@@ -187,7 +187,7 @@ class SolarCycle:
         return float(value) if value.ndim == 0 else value
 
     def phase(self, year):
-        """Fraction of the cycle elapsed at decimal ``year``(s) (may lie outside [0, 1))."""
+        """Fraction of the cycle elapsed at decimal ``year`` (one or many) (may lie outside [0, 1))."""
         return (np.asarray(year, dtype=float) - self.start) / self.length
 
 
