@@ -156,9 +156,13 @@ class ShiftBasis:
         coordinates : `numpy.ndarray`
             (n, J).
         """
-        spectra = np.asarray(spectra, dtype=np.float64)
-        continuum = 0.5 * (spectra[:, 0] + spectra[:, -1])
-        return continuum, (spectra - continuum[:, None]) @ self.vectors.T
+        spectra = np.asarray(spectra)
+        if spectra.dtype != np.float32:
+            spectra = spectra.astype(np.float64)
+        continuum = 0.5 * (spectra[:, 0].astype(np.float64) + spectra[:, -1])
+        # float32 spectra stay float32 (the line's depth relative to the continuum keeps 7 digits).
+        line = spectra - continuum[:, None].astype(spectra.dtype)
+        return continuum, (line @ self.vectors.T.astype(spectra.dtype)).astype(np.float64)
 
     def channels(self, continuum, coordinates, velocity):
         """
