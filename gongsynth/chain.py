@@ -42,6 +42,7 @@ from gongsynth.stages.camera.integrate import integrate
 from gongsynth.stages.channels import channel_images
 from gongsynth.stages.reduction import reduce
 from gongsynth.stages.scene.fulldisk import full_disk_scene
+from gongsynth.stages.scene.library import LIBRARY_SEED, cached_library
 from gongsynth.stages.scene.tiled import tiled_scenes
 from gongsynth.sun.atmosphere import Atmosphere
 from gongsynth.sun.photosphere import DeferredStokes
@@ -188,7 +189,7 @@ def interactive():
     return sys.stderr.isatty()
 
 
-def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False):
+def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, surface_field=None):
     """
     The stages of one run, in order, for ``config``.
 
@@ -205,6 +206,9 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False):
         default the instrument's synthetic ones.
     progress : bool
         Progress bars inside long stages (only drawn on a terminal).
+    surface_field : `sunpy.map.GenericMap`, optional
+        Full-disk mode: the large-scale radial field (``config.surface_field``
+        names where it came from); None: the quiet Sun.
 
     Returns
     -------
@@ -219,7 +223,16 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False):
     pointing = Pointing(config.latitude, config.obstime)
     stages = Chain()
 
-    if stokes is None:
+    if stokes is None and config.mode == "full-disk":
+        def library():
+            knobs = {k: v for k, v in config.sun_arguments().items() if k not in ("shape", "pixel_size")}
+            # The library's own fixed seed: every run seed shares it (and its cache); the
+            # run's seed lays the patches out in the scene stage.
+            return {"photosphere": cached_library(seed=LIBRARY_SEED, knobs=knobs, instrument=inst)}
+
+        stages.append(Stage("photosphere", (), ("photosphere",), library,
+                            "the built-in Sun's patch library: quiet to plage, synthesised at 11 angles"))
+    elif stokes is None:
         def photosphere():
             return {"photosphere": SUNS[config.sun](seed=child_sequence(config.seed, "photosphere"),
                                                     **config.sun_arguments())}
@@ -234,11 +247,14 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False):
     if config.mode == "full-disk":
         def disk_scene(photosphere):
             light, truth = full_disk_scene(photosphere, detector_shape=config.detector_pixels,
-                                           obstime=config.obstime, instrument=inst, progress=progress)
+                                           obstime=config.obstime, instrument=inst, progress=progress,
+                                           surface_field=surface_field,
+                                           seed=child_sequence(config.seed, "scene"))
             return {"light": light, "truth_scene": truth}
 
         stages.append(Stage("scene", ("photosphere",), ("light", "truth_scene"), disk_scene,
-                            "synthesis at every point's own mu, mapped over the disk"))
+                            "the large-scale field filled with the library's small scales, rotation and "
+                            "the observer's motion in the spectra"))
     else:
         if stokes is None and config.sun == "model-atmosphere":
             def atmosphere_transfer(photosphere):

@@ -26,7 +26,7 @@ import math
 import numba as nb
 import numpy as np
 
-__all__ = ["render_disk"]
+__all__ = ["cell_table", "render_disk"]
 
 @nb.njit(cache=True, inline="always")
 def _splitmix(state):
@@ -62,10 +62,46 @@ def _bilinear(grid, lon0, lat0, step, lon, lat):
             + fy * ((1 - fx) * grid[i + 1, j] + fx * grid[i + 1, j + 1]))
 
 
+def cell_table(radius, cell_km, distance, b0):
+    """
+    Centre and turn of every surface cell: (table, (j0, i0)).
+
+    Parameters
+    ----------
+    radius, cell_km, distance : float
+        Solar radius, cell side and observer distance (km).
+    b0 : float
+        B0 (rad).
+
+    Returns
+    -------
+    table : `numpy.ndarray`
+        float64 (nj, ni, 4): centre longitude and latitude (rad), cos and sin
+        of the observer's azimuth seen from the centre (in its west-north frame),
+        for cell (j, i) at ``[j + j0, i + i0]``.
+    origin : (int, int)
+        (j0, i0).
+    """
+    i0 = int(math.ceil(math.pi * radius / cell_km)) + 1
+    j0 = int(math.ceil(0.5 * math.pi * radius / cell_km)) + 1
+    cj = np.arange(-j0, j0)[:, None]
+    ci = np.arange(-i0, i0)[None, :]
+    bc = np.clip((cj + 0.5) * cell_km / radius, -1.5, 1.5)
+    lc = (ci + 0.5) * cell_km / (radius * np.cos(bc))
+    dx = distance * math.cos(b0) - radius * np.cos(bc) * np.cos(lc)
+    dy = -radius * np.cos(bc) * np.sin(lc)
+    dz = distance * math.sin(b0) - radius * np.sin(bc)
+    west = -np.sin(lc) * dx + np.cos(lc) * dy
+    north = -np.sin(bc) * (np.cos(lc) * dx + np.sin(lc) * dy) + np.cos(bc) * dz
+    alpha = np.arctan2(north, west)
+    table = np.stack(np.broadcast_arrays(lc, bc, np.cos(alpha), np.sin(alpha)), axis=-1)
+    return np.ascontiguousarray(table), (j0, i0)
+
+
 @nb.njit(cache=True, parallel=True, error_model="numpy")
 def render_disk(light, truth, h, distance, b0, radius,
                 field, velocity, grid_lon0, grid_lat0, grid_step,
-                cell_km, seed, theta, ld_coeff,
+                cell_km, cells, cell_j0, cell_i0, seed, theta, ld_coeff,
                 level_net, level_first, level_count, level_uniform,
                 patches, uniform, pixel_km, mirror_ok, n_e, e_index, v_sign,
                 amplitudes, totals, v_first, v_step, to_earth):
@@ -86,6 +122,10 @@ def render_disk(light, truth, h, distance, b0, radius,
         Their first longitude and latitude and spacing (deg).
     cell_km : float
         Cell side.
+    cells : float64 (nj, ni, 4)
+        `cell_table`: each cell's centre and turn.
+    cell_j0, cell_i0 : int
+        Its origin.
     seed : uint64
         The run's scene seed.
     theta : float64 (T,)
@@ -165,20 +205,10 @@ def render_disk(light, truth, h, distance, b0, radius,
             cos_b = math.cos(b)
             ci = math.floor(radius * lon * cos_b / cell_km)
             cj = math.floor(radius * b / cell_km)
-            bc = min(max((cj + 0.5) * cell_km / radius, -1.5), 1.5)
-            cos_bc = math.cos(bc)
-            lc = (ci + 0.5) * cell_km / (radius * cos_bc)
+            cell = cells[min(max(cj + cell_j0, 0), cells.shape[0] - 1), min(max(ci + cell_i0, 0), cells.shape[1] - 1)]
+            lc, bc, ca, sa = cell[0], cell[1], cell[2], cell[3]
             xl = radius * cos_b * (lon - lc)
             yl = radius * (b - bc)
-            # Azimuth of the observer seen from the cell centre, in its (west, north) frame.
-            sin_lc, cos_lc, sin_bc = math.sin(lc), math.cos(lc), math.sin(bc)
-            dx = obs_x - radius * cos_bc * cos_lc
-            dy = -radius * cos_bc * sin_lc
-            dz = obs_z - radius * sin_bc
-            west = -sin_lc * dx + cos_lc * dy
-            north = -sin_bc * (cos_lc * dx + sin_lc * dy) + cos_bc * dz
-            alpha = math.atan2(north, west)
-            ca, sa = math.cos(alpha), math.sin(alpha)
             u0 = ca * xl + sa * yl
             w0 = -sa * xl + ca * yl
             for side in range(2):

@@ -17,7 +17,7 @@ from gongsynth.geometry import as_obstime, wcs_header
 from gongsynth.planes import N_PLANES
 from gongsynth.seeding import as_seed_sequence
 from gongsynth.stages.channels import CHANNEL_UNIT
-from gongsynth.stages.scene.disk_kernel import render_disk
+from gongsynth.stages.scene.disk_kernel import cell_table, render_disk
 from gongsynth.stages.scene.scene import Scene, radiance_at_earth, sky_grid
 from gongsynth.stages.scene.surface import large_scale_grid
 from gongsynth.sun.rotation import CONVECTIVE_BLUESHIFT_FE6302
@@ -117,14 +117,16 @@ def library_scene(library, *, obstime=None, instrument=None, detector_shape=None
     basis = library.basis
     level_first = np.array([p[0] if p else -1 for p in library.level_patches], dtype=np.int64)
     level_count = np.array([max(len(p), 1) for p in library.level_patches], dtype=np.int64)
+    distance, b0, r_sun = get_earth(time).radius.to_value(u.km), sun.B0(time).to_value(u.rad), radius.to_value(u.km)
+    cells, (cell_j0, cell_i0) = cell_table(r_sun, cell_km, distance, b0)
     on_disk, outside = render_disk(
-        light, blos, scale.to_value(u.rad), get_earth(time).radius.to_value(u.km),
-        sun.B0(time).to_value(u.rad), radius.to_value(u.km),
+        light, blos, scale.to_value(u.rad), distance, b0, r_sun,
         large.field, large.velocity, float(large.longitude[0]), float(large.latitude[0]),
         float(large.longitude[1] - large.longitude[0]),
-        cell_km, _scene_seed(seed), np.radians(library.theta), np.asarray(library.line.limb_darkening, float),
+        cell_km, cells, cell_j0, cell_i0, _scene_seed(seed), np.radians(library.theta), np.asarray(library.line.limb_darkening, float),
         library.level_net.astype(np.float64), level_first, level_count,
-        np.asarray(library.level_uniform, dtype=np.int64), library.patches, library.uniform,
+        np.asarray(library.level_uniform, dtype=np.int64), np.asarray(library.patches),
+        np.asarray(library.uniform),
         library.pixel_size.to_value(u.km), bool(library.mirror_ok), int(library.n_e),
         np.asarray(library.e_index, dtype=np.int64), np.asarray(library.v_sign, dtype=np.float64),
         basis.amplitudes, basis.totals, float(basis.velocity[0]), float(basis.velocity[1] - basis.velocity[0]),

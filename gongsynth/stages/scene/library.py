@@ -26,7 +26,13 @@ and viewing angle and keeps only what the channels need:
 Each patch is periodic; the scene never repeats one over the disk (random
 offsets, rotations and mirrors per cell of the surface).
 """
+import hashlib
+import json
+import os
+import shutil
+import tempfile
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import astropy.units as u
 import numpy as np
@@ -34,11 +40,12 @@ import numpy as np
 from gongsynth.instrument import resolve_instrument
 from gongsynth.seeding import as_seed_sequence, child_sequence
 from gongsynth.stages.channels import analyser_coefficients
-from gongsynth.stages.scene.shifts import shift_basis
+from gongsynth.stages.scene.shifts import ShiftBasis, shift_basis
 from gongsynth.sun.photosphere import NiLine, Photosphere, default_wavelength, model_photosphere, synthesize
 from gongsynth.validation import check_quantity
 
-__all__ = ["LEVELS", "STRONG_FIELDS", "DEFAULT_THETA", "PatchLibrary", "build_library"]
+__all__ = ["LEVELS", "STRONG_FIELDS", "DEFAULT_THETA", "LIBRARY_SEED", "PatchLibrary", "build_library",
+           "cached_library", "cache_directory"]
 
 #: The patch levels: name and the `model_photosphere` knobs that set them (no
 #: sunspot, no plage patches: the flux sits in network elements of
@@ -60,6 +67,10 @@ LEVELS = (
 #: (Borrero & Ichimoto 2011), interpolated linearly in field and extended to a
 #: pore (1 kG, 0.9) and a dark umbra (4 kG, 0.15).
 STRONG_FIELDS = ((1000 * u.G, 0.9), (2000 * u.G, 0.62), (3000 * u.G, 0.25), (4000 * u.G, 0.15))
+
+#: The seed of the built-in library: runs of any seed share its patches (their
+#: own seed lays them out), so that it is built once and cached.
+LIBRARY_SEED = 0
 
 #: Viewing angles (deg from the vertical) at which the patches are synthesised.
 DEFAULT_THETA = (0.0, 15.0, 30.0, 42.0, 52.0, 61.0, 69.0, 76.0, 82.0, 86.5, 89.0)
@@ -321,3 +332,122 @@ def build_library(*, seed=0, shape=(256, 256), pixel_size=384 * u.km, seeds_per_
                         level_uniform=tuple([-1] * len(levels) + list(range(len(strong_fields)))),
                         pixel_size=pixel_size.to(u.km), basis=basis, n_e=n_e, e_index=e_index,
                         v_sign=v_sign, mirror_ok=mirror_ok, line=line, meta=meta)
+
+
+# ---- caching: the library depends only on its arguments; building it takes ~10 s, loading < 1 s.
+
+_MEMO = {}
+# Modules whose code shapes the stored numbers: a change to any of them is a new library.
+_SOURCES = ("stages/scene/library.py", "stages/scene/shifts.py", "stages/filters.py", "stages/channels.py",
+            "sun/photosphere/model.py", "sun/photosphere/synthesis.py", "sun/photosphere/_kernel.py",
+            "sun/photosphere/line.py", "sun/photosphere/columns.py")
+_ARRAYS = ("patches", "uniform", "theta", "level_net")
+_BASIS = ("wavelength", "vectors", "velocity", "amplitudes", "totals")
+
+
+def cache_directory():
+    """
+    Where built libraries are kept: ``$GONGSYNTH_CACHE_DIR``, else ``~/.cache/gongsynth``.
+
+    Returns
+    -------
+    `pathlib.Path` or None
+        None when the variable is set to ``""`` or ``"off"`` (no disk cache).
+    """
+    value = os.environ.get("GONGSYNTH_CACHE_DIR")
+    if value is not None and value.strip().lower() in ("", "off", "none"):
+        return None
+    if value is None:
+        base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+        return Path(base) / "gongsynth"
+    return Path(value)
+
+
+def _key(arguments):
+    root = Path(__file__).resolve().parents[2]
+    digest = hashlib.sha256()
+    for name in _SOURCES:
+        digest.update((root / name).read_bytes())
+    text = json.dumps({k: repr(v) for k, v in sorted(arguments.items())}, sort_keys=True)
+    digest.update(text.encode())
+    digest.update(np.__version__.encode())
+    return digest.hexdigest()[:24]
+
+
+def _save(library, folder):
+    folder.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=folder.name + ".", dir=folder.parent))
+    try:
+        for name in _ARRAYS:
+            np.save(tmp / f"{name}.npy", getattr(library, name))
+        for name in _BASIS:
+            np.save(tmp / f"basis_{name}.npy", getattr(library.basis, name))
+        small = {"level_patches": [list(p) for p in library.level_patches],
+                 "level_uniform": list(library.level_uniform), "pixel_km": library.pixel_size.to_value(u.km),
+                 "n_e": library.n_e, "e_index": list(library.e_index), "v_sign": list(library.v_sign),
+                 "mirror_ok": library.mirror_ok, "basis_error": library.basis.error, "meta": library.meta}
+        (tmp / "library.json").write_text(json.dumps(small))
+        tmp.rename(folder)
+    except OSError:
+        shutil.rmtree(tmp, ignore_errors=True)   # another process won the race, or no room: no cache
+
+
+def _load(folder, line):
+    small = json.loads((folder / "library.json").read_text())
+    arrays = {name: np.load(folder / f"{name}.npy", mmap_mode="r" if name == "patches" else None)
+              for name in _ARRAYS}
+    basis = ShiftBasis(**{name: np.load(folder / f"basis_{name}.npy") for name in _BASIS},
+                       error=small["basis_error"])
+    return PatchLibrary(patches=arrays["patches"], uniform=arrays["uniform"], theta=arrays["theta"],
+                        level_net=arrays["level_net"],
+                        level_patches=tuple(tuple(p) for p in small["level_patches"]),
+                        level_uniform=tuple(small["level_uniform"]), pixel_size=small["pixel_km"] * u.km,
+                        basis=basis, n_e=small["n_e"], e_index=tuple(small["e_index"]),
+                        v_sign=tuple(small["v_sign"]), mirror_ok=small["mirror_ok"], line=line,
+                        meta={**small["meta"], "cache": str(folder)})
+
+
+def cached_library(**arguments):
+    """
+    `build_library`, built once per argument set and kept in memory and on disk.
+
+    The disk copy (`cache_directory`; ~300 MB for the defaults) is keyed by
+    the arguments and by the source of every module that shapes the numbers
+    (so a code change builds a new one); the patches are memory-mapped from it.
+
+    Parameters
+    ----------
+    **arguments
+        `build_library` arguments (an int seed).
+
+    Returns
+    -------
+    `PatchLibrary`
+
+    Examples
+    --------
+    >>> import astropy.units as u
+    >>> args = dict(shape=(16, 16), pixel_size=6 * u.Mm, seeds_per_level=(1, 1, 1, 1), theta=(0, 60))
+    >>> cached_library(**args) is cached_library(**args)
+    True
+    """
+    seed = arguments.get("seed", 0)
+    if not isinstance(seed, (int, np.integer)):
+        return build_library(**arguments)
+    key = _key(arguments)
+    if key in _MEMO:
+        return _MEMO[key]
+    folder = None if cache_directory() is None else cache_directory() / f"library-{key}"
+    library = None
+    if folder is not None and (folder / "library.json").is_file():
+        try:
+            library = _load(folder, arguments.get("line") or NiLine())
+        except (OSError, ValueError, KeyError):
+            library = None
+    if library is None:
+        library = build_library(**arguments)
+        if folder is not None:
+            _save(library, folder)
+    _MEMO.clear()      # keep one: a library is ~300 MB
+    _MEMO[key] = library
+    return library
