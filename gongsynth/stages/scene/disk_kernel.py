@@ -17,7 +17,9 @@ regular Stonyhurst grid (`gongsynth.stages.scene.surface.LargeScale`).  Per
 sample the library rows of the two viewing angles around its own and
 the two levels around the local |B_r| are mixed linearly (a sub-sample
 filling factor: light and true field mix alike), the stored V and B·n take
-the sign of B_r (the quiet level a random sign per cell), the continuum limb
+the sign of B_r (the quiet level a random sign per cell), the true B·n is
+B_z μ + B_x sin θ of the mixed columns (exact at the sample's angle), the
+continuum limb
 darkening is put back at the sample's own μ, and the Doppler basis gives the
 six channel values at the sample's large-scale line-of-sight velocity.
 """
@@ -136,7 +138,7 @@ def render_disk(light, truth, h, distance, b0, radius,
         Net flux density of each level (G), increasing.
     level_first, level_count, level_uniform : int64 (L,)
         First patch and number of patches of each level; its uniform index (-1: a patch level).
-    patches : float32 (P, T, ny, nx, K), uniform : float32 (U, T, K)
+    patches : float32 (P, ny, nx, T, K), uniform : float32 (U, T, K)
         The library rows.
     pixel_km : float
         Patch column size.
@@ -158,7 +160,7 @@ def render_disk(light, truth, h, distance, b0, radius,
         Samples whose velocity fell outside the basis' table (clamped).
     """
     big_y, big_x = truth.shape
-    ny, nx, k_row = patches.shape[2], patches.shape[3], patches.shape[4]
+    ny, nx, k_row = patches.shape[1], patches.shape[2], patches.shape[4]
     j = amplitudes.shape[2]
     j1 = j + 1
     v_off = n_e * j1
@@ -171,6 +173,8 @@ def render_disk(light, truth, h, distance, b0, radius,
     counts = np.zeros((big_y, 2), dtype=np.int64)
     for row in nb.prange(big_y):
         acc = np.empty(k_row)
+        amp = np.empty((3, j))
+        tot = np.empty(3)
         y = (row - (big_y - 1) / 2) * h
         for col in range(big_x):
             x = (col - (big_x - 1) / 2) * h
@@ -200,7 +204,8 @@ def render_disk(light, truth, h, distance, b0, radius,
             level0, wl = _bracket(level_net, abs(m))
             if abs(m) >= level_net[n_levels - 1]:
                 level0, wl = n_levels - 1, 0.0
-            t0, wt = _bracket(theta, math.acos(mu))
+            view = math.acos(mu)
+            t0, wt = _bracket(theta, view)
             # -- the cell and the sample's offset from its centre (west, north; km)
             cos_b = math.cos(b)
             ci = math.floor(radius * lon * cos_b / cell_km)
@@ -241,7 +246,7 @@ def render_disk(light, truth, h, distance, b0, radius,
                     if wgt == 0.0:
                         continue
                     if uni < 0:
-                        src = patches[p, t0 + tt, iy, ix]
+                        src = patches[p, iy, ix, t0 + tt]
                     else:
                         src = uniform[uni, t0 + tt]
                     for k in range(v_off):
@@ -259,15 +264,19 @@ def render_disk(light, truth, h, distance, b0, radius,
                 xv = min(max(xv, 0.0), n_v - 1.0)
             kv = min(np.int64(xv), n_v - 2)
             fv = xv - kv
+            for c in range(3):
+                tot[c] = (1.0 - fv) * totals[kv, c] + fv * totals[kv + 1, c]
+                for qq in range(j):
+                    amp[c, qq] = (1.0 - fv) * amplitudes[kv, c, qq] + fv * amplitudes[kv + 1, c, qq]
             scale = ld * to_earth
             for pol in range(2):
                 e0 = e_index[pol] * j1
                 vs = v_sign[pol]
                 for c in range(3):
-                    val = (acc[e0] + vs * acc[v_off]) * ((1.0 - fv) * totals[kv, c] + fv * totals[kv + 1, c])
+                    val = (acc[e0] + vs * acc[v_off]) * tot[c]
                     for qq in range(j):
-                        amp = (1.0 - fv) * amplitudes[kv, c, qq] + fv * amplitudes[kv + 1, c, qq]
-                        val += amp * (acc[e0 + 1 + qq] + vs * acc[v_off + 1 + qq])
+                        val += amp[c, qq] * (acc[e0 + 1 + qq] + vs * acc[v_off + 1 + qq])
                     light[pol * 3 + c, row, col] = scale * val
-            truth[row, col] = acc[b_off]
+            # The true B·n: the patch frame's observer lies toward +x at the sample's own angle.
+            truth[row, col] = acc[b_off] * mu + acc[b_off + 1] * math.sin(view)
     return counts[:, 0].sum(), counts[:, 1].sum()

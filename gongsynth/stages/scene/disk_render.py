@@ -130,7 +130,8 @@ def library_scene(library, *, obstime=None, instrument=None, detector_shape=None
         library.pixel_size.to_value(u.km), bool(library.mirror_ok), int(library.n_e),
         np.asarray(library.e_index, dtype=np.int64), np.asarray(library.v_sign, dtype=np.float64),
         basis.amplitudes, basis.totals, float(basis.velocity[0]), float(basis.velocity[1] - basis.velocity[0]),
-        float(to_earth.value))
+        # The basis integrates over wavelength in nm; the channel unit is per cm of spectrum × cm.
+        float(to_earth.value * (1 * u.nm).to_value(u.cm)))
     if outside:
         warnings.warn(f"{outside} samples have a large-scale velocity beyond the library's Doppler basis "
                       f"(±{basis.max_velocity:.0f}): clamped", stacklevel=3)

@@ -86,12 +86,14 @@ class PatchLibrary:
     Attributes
     ----------
     patches : `numpy.ndarray`
-        float32 (n_patches, n_theta, ny, nx, K): per column and angle the row
+        float32 (n_patches, ny, nx, n_theta, K): per column and angle the row
         ``[E_0 continuum, E_0 coordinates (J), (E_1 continuum, E_1 coordinates),
-        V continuum, V coordinates (J), B·n]``, where E_p is the
+        V continuum, V coordinates (J), B_z, B_x]``, where E_p is the
         polarisation-independent part (I, Q, U) of analyser state p and V the
         Stokes V spectrum, each divided by the continuum limb darkening at that
-        angle (radiance units: erg s⁻¹ cm⁻² sr⁻¹ cm⁻¹), and B·n in G (not divided).
+        angle (radiance units: erg s⁻¹ cm⁻² sr⁻¹ cm⁻¹), and the column's field
+        in G along the vertical and the patch's +x (toward the observer): the
+        true B·n at viewing angle θ is B_z cos θ + B_x sin θ.
     uniform : `numpy.ndarray`
         float32 (n_uniform, n_theta, K): the same for the uniform strong-field columns.
     theta : `numpy.ndarray`
@@ -149,7 +151,7 @@ class PatchLibrary:
     @property
     def shape(self):
         """(ny, nx) of every patch."""
-        return self.patches.shape[2:4]
+        return self.patches.shape[1:3]
 
     @property
     def patch_km(self):
@@ -173,11 +175,12 @@ class PatchLibrary:
         Returns
         -------
         dict
-            ``{"e": [offset of E_0, (offset of E_1)], "v": offset of V, "blos": offset of B·n}``;
-            each E and V part is J + 1 floats (continuum, then coordinates).
+            ``{"e": [offset of E_0, (offset of E_1)], "v": offset of V, "bz": offset of B_z,
+            "bx": offset of B_x}``; each E and V part is J + 1 floats (continuum, then coordinates).
         """
         j1 = self.rank + 1
-        return {"e": [i * j1 for i in range(self.n_e)], "v": self.n_e * j1, "blos": (self.n_e + 1) * j1}
+        return {"e": [i * j1 for i in range(self.n_e)], "v": self.n_e * j1, "bz": (self.n_e + 1) * j1,
+                "bx": (self.n_e + 1) * j1 + 1}
 
     def __repr__(self):
         names = self.meta.get("levels", [])
@@ -199,8 +202,8 @@ def _analyser(mueller):
     return n_e, e_index, tuple(float(c) for c in coeff[:, 3]), weights, bool(np.all(e_rows[:, 2] == 0))
 
 
-def _rows(cube, basis, e_weights, ld):
-    """Stored rows (n, K) of a synthesised cube."""
+def _rows(cube, photosphere, basis, e_weights, ld):
+    """Stored rows (n, K) of a synthesised cube and its photosphere's B_z and B_x."""
     stokes = [getattr(cube, name).value.reshape(-1, cube.shape[-1]) for name in ("I", "Q", "U", "V")]
     parts = []
     for w in e_weights:
@@ -211,7 +214,8 @@ def _rows(cube, basis, e_weights, ld):
     cont, coords = basis.coordinates(stokes[3])
     parts += [cont[:, None], coords]
     rows = np.concatenate(parts, axis=1) / ld
-    return np.concatenate([rows, cube.blos.value.reshape(-1, 1)], axis=1)
+    bx, _, bz = photosphere.field_vector()
+    return np.concatenate([rows, bz.reshape(-1, 1), bx.reshape(-1, 1)], axis=1)
 
 
 def _uniform_photosphere(field_g, continuum):
@@ -268,7 +272,7 @@ def build_library(*, seed=0, shape=(256, 256), pixel_size=384 * u.km, seeds_per_
     >>> import astropy.units as u
     >>> lib = build_library(shape=(16, 16), pixel_size=6 * u.Mm, seeds_per_level=(1, 1, 1, 1),
     ...                     theta=(0, 45, 85))
-    >>> lib.n_levels, lib.patches.shape[:2], bool(lib.level_net[-1] > lib.level_net[0])
+    >>> lib.n_levels, lib.patches.shape[::3], bool(lib.level_net[-1] > lib.level_net[0])
     (8, (4, 3), True)
     """
     inst = resolve_instrument(instrument)
@@ -289,9 +293,10 @@ def build_library(*, seed=0, shape=(256, 256), pixel_size=384 * u.km, seeds_per_
     for fixed in ("shape", "pixel_size", "seed"):
         knobs.pop(fixed, None)
     root = as_seed_sequence(seed)
-    k_row = (n_e + 1) * (basis.rank + 1) + 1
+    k_row = (n_e + 1) * (basis.rank + 1) + 2
     ny, nx = shape
-    patches = np.empty((sum(seeds_per_level), theta.size, ny, nx, k_row), dtype=_FLOAT)
+    # (patch, y, x, angle, row): a sample's two angles are neighbours in memory.
+    patches = np.empty((sum(seeds_per_level), ny, nx, theta.size, k_row), dtype=_FLOAT)
     level_patches, level_net, names, index = [], [], [], 0
     for number, ((name, overrides), count) in enumerate(zip(levels, seeds_per_level)):
         members, nets = [], []
@@ -304,7 +309,8 @@ def build_library(*, seed=0, shape=(256, 256), pixel_size=384 * u.km, seeds_per_
             for t, (m, factor) in enumerate(zip(mu, ld)):
                 cube = synthesize(photosphere, mu=float(m), los_azimuth=0 * u.deg, wavelength=wavelength,
                                   instrument=inst, line=line)
-                patches[index, t] = _rows(cube, basis, e_weights, factor).reshape(ny, nx, k_row)
+                patches[index, :, :, t] = _rows(cube, photosphere, basis, e_weights,
+                                                factor).reshape(ny, nx, k_row)
             members.append(index)
             index += 1
         level_patches.append(tuple(members))
@@ -316,7 +322,7 @@ def build_library(*, seed=0, shape=(256, 256), pixel_size=384 * u.km, seeds_per_
         for t, (m, factor) in enumerate(zip(mu, ld)):
             cube = synthesize(column, mu=float(m), los_azimuth=0 * u.deg, wavelength=wavelength,
                               instrument=inst, line=line)
-            uniform[number, t] = _rows(cube, basis, e_weights, factor)[0]
+            uniform[number, t] = _rows(cube, column, basis, e_weights, factor)[0]
         level_net.append(float(strength.to_value(u.G)))
         names.append(f"uniform {strength.to_value(u.G):.0f} G")
     net = np.array(level_net)

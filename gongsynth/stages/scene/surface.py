@@ -154,7 +154,8 @@ def large_scale_grid(obstime=None, surface_field=None, *, step=0.25 * u.deg, sit
     >>> grid.field.shape, float(abs(grid.field).max())
     ((91, 181), 0.0)
     """
-    from sunpy.coordinates import sun
+    from sunpy.coordinates import get_earth, sun
+    from sunpy.sun.constants import radius
     time = as_obstime(obstime)
     dstep = check_quantity(step, u.deg, "step").to_value(u.deg)
     if not 0 < dstep <= 5:
@@ -167,10 +168,13 @@ def large_scale_grid(obstime=None, surface_field=None, *, step=0.25 * u.deg, sit
     else:
         field = sample_surface_field(surface_field, glon * u.deg, glat * u.deg, time).to_value(u.G)
         field = np.where(np.isfinite(field), field, 0.0)
-    # μ of each grid point seen from Earth (the blueshift's argument; clipped at the limb).
+    # μ of each grid point seen from the Earth at its distance (the blueshift's argument; 0 beyond the limb).
     b0 = sun.B0(time).to_value(u.rad)
+    distance = (get_earth(time).radius / radius).to_value(u.one)
     rlat, rlon = np.radians(glat), np.radians(glon)
-    mu = np.clip(np.cos(rlat) * np.cos(rlon) * np.cos(b0) + np.sin(rlat) * np.sin(b0), 0.0, 1.0)
+    point = np.stack([np.cos(rlat) * np.cos(rlon), np.cos(rlat) * np.sin(rlon), np.sin(rlat)])
+    sight = np.array([distance * np.cos(b0), 0.0, distance * np.sin(b0)])[:, None, None] - point
+    mu = np.clip((point * sight).sum(axis=0) / np.sqrt((sight ** 2).sum(axis=0)), 0.0, 1.0)
     velocity = disk_velocity(glon * u.deg, glat * u.deg, mu, time, site=site, rotation=rotation,
                              observer=observer, blueshift=blueshift).to_value(u.m / u.s)
     meta = {"obstime": time.isot, "step_deg": dstep, "surface_field": None if surface_field is None
