@@ -3,9 +3,10 @@
 Quick start: a GONG magnetogram in three lines
 ==============================================
 
-`gongsynth.simulate` runs the whole chain — the built-in model photosphere,
-Milne–Eddington spectra of Ni I 676.8 nm, GONG's filters, optics and camera
-and the GONG reduction — and returns sunpy Maps.
+`gongsynth.simulate` runs the whole chain — the built-in 3-D model Sun
+(granulation, kilogauss network elements, internetwork fields), LTE radiative
+transfer of Ni I 676.8 nm along the rays of the viewing angle, GONG's filters,
+optics and camera and the GONG reduction — and returns sunpy Maps.
 """
 # %%
 # Three lines: import, simulate, plot.  ``detector_shape=256`` keeps this

@@ -20,7 +20,9 @@ from gongsynth.products.maps import GONGSynthMap  # registers the map source wit
 from gongsynth.stages import filters, reduction
 from gongsynth.sun import photosphere, rt
 from gongsynth.sun.atmosphere import Atmosphere
+from gongsynth.sun.model_atmosphere import model_atmosphere
 from gongsynth.sun.stokes import StokesCube
+from gongsynth.sun.surface_field import surface_field_from_map, synthetic_surface_field
 from gongsynth.version import version as __version__
 
 __citation__ = (
@@ -36,5 +38,6 @@ for _name, _module in {"filters": filters, "reduction": reduction, "compare": co
 del _name, _module
 
 __all__ = ["Atmosphere", "GONGInstrument", "GONGSynthMap", "SimulationResult", "StokesCube", "calibrate",
-           "calibration", "compare", "filters", "load_observation", "photosphere", "reduction", "rt",
-           "simulate", "simulate_many", "weak_flux_factor", "__citation__", "__version__"]
+           "calibration", "compare", "filters", "load_observation", "model_atmosphere",
+           "photosphere", "reduction", "rt", "simulate", "simulate_many", "surface_field_from_map",
+           "synthetic_surface_field", "weak_flux_factor", "__citation__", "__version__"]

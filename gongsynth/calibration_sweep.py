@@ -80,7 +80,8 @@ def build_calibration_table(latitudes=TABLE_LATITUDES, seeds=(1, 2), *, regions=
     --------
     >>> import astropy.units as u
     >>> table = build_calibration_table([0] * u.deg, seeds=[1], regions=["quiet"], n_boot=5,
-    ...                                 detector_shape=96, duration=1 * u.min, progress=False)
+    ...                                 detector_shape=96, duration=1 * u.min, sun="milne-eddington",
+    ...                                 progress=False)
     >>> len(table), table.meta["seeds"]
     (1, [1])
     """
@@ -115,7 +116,8 @@ def build_calibration_table(latitudes=TABLE_LATITUDES, seeds=(1, 2), *, regions=
     bar.close()
     return calibration_table(fits, mu=mu, metadata={
         "gongsynth_version": __version__,
-        "input_sun": input_sun or "built-in model photosphere (Milne-Eddington synthesis)",
+        "input_sun": input_sun or (f"built-in Sun {config.sun!r} ({config.photosphere_shape[0]}^2 columns of "
+                                   f"{config.photosphere_pixel_size})"),
         "seeds": seeds,
         "preset": preset,
         "estimator": "papers II/III: flux-conserving piecewise-linear truth = g(measured), "

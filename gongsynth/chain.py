@@ -10,7 +10,8 @@ a stage for their own:
 >>> import astropy.units as u
 >>> from gongsynth.config import SimulationConfig
 >>> config = SimulationConfig(seed=1, detector_shape=16, resolutions=(1,), duration=1 * u.min,
-...                           photosphere_shape=(64, 64), photosphere_pixel_size=1536 * u.km)
+...                           photosphere_shape=(64, 64), photosphere_pixel_size=1536 * u.km,
+...                           sun="milne-eddington")
 >>> chain = build_chain(config)
 >>> chain.names
 ('photosphere', 'synthesis', 'channels', 'scene', 'optics', 'camera', 'reduction', 'maps')
@@ -33,7 +34,6 @@ import astropy.units as u
 import numpy as np
 from sunpy import log
 
-from gongsynth.config import SUNS
 from gongsynth.geometry import Pointing, disk_geometry
 from gongsynth.products.maps import PRODUCTS, make_product_map
 from gongsynth.seeding import child_sequence
@@ -48,6 +48,7 @@ from gongsynth.sun.atmosphere import Atmosphere
 from gongsynth.sun.photosphere import DeferredStokes
 from gongsynth.sun.rt.synthesis import synthesize as rt_synthesize
 from gongsynth.sun.sampling import check_spectral_sampling
+from gongsynth.suns import SUNS
 
 __all__ = ["Stage", "Chain", "build_chain", "interactive", "run_header", "unmeasured", "SKY_FRACTION"]
 

@@ -5,7 +5,8 @@ The ``gongsynth`` command line.
 
     gongsynth simulate [--config run.toml] [--latitude 60] [--duration 10] [--engine frames]
                        [--seed 1] [--workers N] [--mode tiled|full-disk] [--shape 256]
-                       [--obstime ISO] [--no-psf] [--no-photon-noise] ... [--overwrite] [--quiet]
+                       [--date ISO] [--site BB] [--like GONG.fits] [--no-psf] [--no-photon-noise] ...
+                       [--overwrite] [--quiet]
                        --out DIR
     gongsynth compare SIM.fits OBS.fits [--out FIGURE.png]
     gongsynth calibrate IN.fits --out OUT.fits [--table TABLE.ecsv] [--overwrite]
@@ -25,8 +26,9 @@ from pathlib import Path
 import astropy.units as u
 from sunpy import log
 
-from gongsynth.config import ENGINES, MODES, SUNS, Effects
+from gongsynth.config import ENGINES, MODES, Effects
 from gongsynth.resources import CannotRunHereError
+from gongsynth.suns import SUNS
 from gongsynth.version import version as __version__
 
 __all__ = ["main", "build_parser"]
@@ -81,8 +83,13 @@ def build_parser():
                      help="observation length in minutes (a whole number of 1/60 s frames)")
     sim.add_argument("--engine", choices=ENGINES, help="camera engine")
     sim.add_argument("--mode", choices=MODES, help="scene mode")
-    sim.add_argument("--obstime", metavar="ISO", help="observation time, e.g. 2009-09-05T18:54 "
-                                                      "(sets B0, the observer and the map dates)")
+    sim.add_argument("--date", "--obstime", dest="obstime", metavar="ISO",
+                     help="observation time, e.g. 2009-09-05T18:54 (sets B0, the observer and the map dates)")
+    sim.add_argument("--site", metavar="CODE", help="the observer's GONG site (BB, ML, LE, UD, TD, CT); "
+                                                    "default the Earth's centre")
+    sim.add_argument("--like", type=Path, metavar="GONG.fits",
+                     help="take date, site and plate scale from a real GONG full-disk file ('what GONG "
+                          "saw at Big Bear on 2009-09-05 18:54'); --date and --site still win")
     sim.add_argument("--seed", type=_number(int, minimum=0),
                      help="root random seed (default: fresh, recorded)")
     sim.add_argument("--shape", type=_number(int, minimum=8), metavar="N",
@@ -90,8 +97,9 @@ def build_parser():
     sim.add_argument("--workers", type=_number(int, minimum=1), metavar="N",
                      help="parallel workers: threads for one run, Dask workers for a sweep")
     sim.add_argument("--sun", choices=tuple(SUNS),
-                     help="the built-in Sun: Milne-Eddington columns (fast, the default) or the 3-D "
-                          "model atmosphere through LTE radiative transfer")
+                     help="the built-in Sun: the 3-D model atmosphere through LTE radiative transfer "
+                          "(default in tiled mode) or Milne-Eddington columns (fast, a toy for calibration; "
+                          "the default over the full disk)")
     sim.add_argument("--atmosphere", type=Path, metavar="PATH",
                      help="a model atmosphere as the input Sun, synthesised by LTE radiative transfer: "
                           "a MURaM snapshot folder, a gongsynth or ART HDF5 file (.h5), or a 1-D model "
@@ -127,14 +135,18 @@ def build_parser():
 
 def _simulation_config(args):
     from gongsynth.config import SimulationConfig
+    from gongsynth.observing import like_gong
 
     config = SimulationConfig.from_toml(args.config) if args.config else SimulationConfig()
     changes = {}
     if args.duration is not None:
         changes["duration"] = args.duration * u.min
-    for name in ("engine", "mode", "seed", "workers", "obstime", "sun"):
+    for name in ("engine", "mode", "seed", "workers", "obstime", "sun", "site"):
         if getattr(args, name) is not None:
             changes[name] = getattr(args, name)
+    if args.like is not None:
+        taken, changes["instrument"] = like_gong(args.like, settings=changes, instrument=config.instrument)
+        changes.update(taken)
     off = {e.name: False for e in dataclasses.fields(Effects) if getattr(args, f"no_{e.name}")}
     if off:
         changes["effects"] = dataclasses.replace(config.effects, **off)

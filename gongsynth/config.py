@@ -9,8 +9,6 @@ Sun chosen by ``sun`` (``[photosphere]``) and a `~gongsynth.GONGInstrument`
 that name the key.
 """
 import dataclasses
-import hashlib
-import inspect
 import numbers
 import tomllib
 from dataclasses import dataclass, field, fields
@@ -24,30 +22,22 @@ from astropy.time import Time
 from gongsynth.geometry import DEFAULT_OBSTIME as _DEFAULT_TIME
 from gongsynth.geometry import Pointing
 from gongsynth.instrument import GONGInstrument
+from gongsynth.observing import GONG_SITES, check_site, like_gong
 from gongsynth.seeding import root_seed
 from gongsynth.stages.camera.integrate import ENGINES
 from gongsynth.stages.camera.schedule import n_frames_in
-from gongsynth.sun.model_atmosphere import model_atmosphere
-from gongsynth.sun.photosphere import model_photosphere
+from gongsynth.suns import DEFAULT_SUNS, SUNS, default_sun, photosphere_defaults, run_grid_default
 from gongsynth.tomlfmt import toml_table
 
-__all__ = ["SimulationConfig", "Effects", "ENGINES", "MODES", "SUNS", "DEFAULT_OBSTIME", "IN_MEMORY",
-           "fingerprint", "photosphere_defaults"]
+__all__ = ["SimulationConfig", "Effects", "ENGINES", "MODES", "DEFAULT_OBSTIME", "IN_MEMORY"]
 
 #: Scene modes accepted by `SimulationConfig.mode`.
-MODES = ("tiled", "full-disk")
+MODES = tuple(DEFAULT_SUNS)
 #: Default observation time (B0 ≈ 0), as an ISO string.
 DEFAULT_OBSTIME = _DEFAULT_TIME.isot
 #: The recorded "path" of a flat or dark that was passed as an array.
 IN_MEMORY = "<array>"
 
-#: The built-in Suns (`SimulationConfig.sun`) and the function that builds each: the
-#: Milne-Eddington column photosphere (fast; a toy for calibration: one line strength
-#: everywhere) and the 3-D model atmosphere synthesised by LTE radiative transfer.
-SUNS = {"milne-eddington": model_photosphere, "model-atmosphere": model_atmosphere}
-
-#: Arguments of the built-in Suns set by [simulation] instead of [photosphere].
-_PHOTOSPHERE_RUN_KEYS = ("shape", "pixel_size", "seed")
 
 _QUANTITIES = {
     "latitude": (u.deg, "heliographic latitude of the field centre on the central meridian"),
@@ -72,6 +62,8 @@ _DOCS = {
     "flat_sha256": "SHA-256 of that flat, checked when the run is repeated",
     "dark_file": "a user-supplied dark: its FITS path, or '<array>' (unset: the synthetic dark)",
     "dark_sha256": "SHA-256 of that dark, checked when the run is repeated",
+    "site": f"the observer's ground site, a GONG site {sorted(GONG_SITES)}; unset: the Earth's centre",
+    "like": "a real GONG full-disk FITS file whose date, site and plate scale the run takes",
 }
 
 
@@ -150,40 +142,6 @@ class Effects:
         return cls(**table)
 
 
-def photosphere_defaults(sun="milne-eddington"):
-    """
-    The knobs of a built-in Sun that ``[photosphere]`` sets, with their defaults.
-
-    Shape, pixel size and seed are run arguments (``photosphere_shape``,
-    ``photosphere_pixel_size``, ``seed``) and are not among them.
-
-    Parameters
-    ----------
-    sun : str
-        A key of `SUNS`.
-
-    Returns
-    -------
-    dict
-
-    Examples
-    --------
-    >>> photosphere_defaults()["umbra_field"]
-    <Quantity 3000. G>
-    >>> photosphere_defaults("model-atmosphere")["element_field"]
-    <Quantity 1500. G>
-    """
-    if sun not in SUNS:
-        raise ValueError(f"sun must be one of {tuple(SUNS)}, got {sun!r}")
-    return {name: p.default for name, p in inspect.signature(SUNS[sun]).parameters.items()
-            if name not in _PHOTOSPHERE_RUN_KEYS}
-
-
-def _sun_default(sun, name):
-    """The default ``shape`` or ``pixel_size`` of a built-in Sun's builder."""
-    return inspect.signature(SUNS[sun]).parameters[name].default
-
-
 def _same(a, b):
     """Whether two knob values are equal (Quantities in any equivalent unit)."""
     try:
@@ -192,7 +150,7 @@ def _same(a, b):
         return False
 
 
-def _photosphere_knobs(values, sun="milne-eddington", where="photosphere"):
+def _photosphere_knobs(values, sun="model-atmosphere", where="photosphere"):
     """
     The knobs of ``values`` that differ from ``sun``'s defaults, each checked against
     its default's type and unit (the builder fills in the rest).
@@ -226,38 +184,6 @@ def _is_int(value):
     return isinstance(value, numbers.Integral) and not isinstance(value, bool)
 
 
-def fingerprint(data):
-    """
-    SHA-256 of a detector map given as a FITS path or an array (values and unit).
-
-    Parameters
-    ----------
-    data : path-like, array_like or `~astropy.units.Quantity`
-
-    Returns
-    -------
-    str
-        Hex digest.
-
-    Examples
-    --------
-    >>> fingerprint([1.0, 2.0]) == fingerprint(np.array([1.0, 2.0]))
-    True
-    """
-    digest = hashlib.sha256()
-    if isinstance(data, (str, Path)):
-        with open(data, "rb") as handle:
-            for block in iter(lambda: handle.read(1 << 20), b""):
-                digest.update(block)
-        return digest.hexdigest()
-    unit = data.unit.to_string() if isinstance(data, u.Quantity) else ""
-    values = np.ascontiguousarray(u.Quantity(data).value if unit else np.asarray(data), dtype=np.float64)
-    digest.update(repr(values.shape).encode())
-    digest.update(values.tobytes())
-    digest.update(unit.encode())
-    return digest.hexdigest()
-
-
 @dataclass(frozen=True)
 class SimulationConfig:
     """
@@ -282,10 +208,12 @@ class SimulationConfig:
         Tile magnifications of the quadrants in tiled mode.
     obstime : str
         ISO time of the observation.
-    sun : str
-        The built-in Sun (a key of `SUNS`): ``"milne-eddington"`` (the column
-        photosphere, fast; default) or ``"model-atmosphere"`` (the 3-D model
-        atmosphere through LTE radiative transfer; tiled mode only).
+    sun : str or None
+        The built-in Sun (a key of `SUNS`): ``"model-atmosphere"`` (the 3-D
+        model atmosphere through LTE radiative transfer; tiled mode only) or
+        ``"milne-eddington"`` (the column photosphere: fast, one line strength
+        everywhere, a toy for calibration).  None (default): the mode's
+        default, `default_sun` (recorded).
     photosphere_shape : tuple of int or None
         Columns of the built-in Sun; None: that Sun's default (recorded).
     photosphere_pixel_size : `~astropy.units.Quantity` or None
@@ -311,6 +239,11 @@ class SimulationConfig:
         was passed as an array (None: the instrument's synthetic one).
     flat_sha256, dark_sha256 : str or None
         Their `fingerprint`, checked when the run is repeated.
+    site : str or None
+        The observer's GONG site code (``"BB"``: Big Bear); None: the Earth's centre.
+    like : str or None
+        A real GONG file whose date, site and plate scale the run took (see
+        `gongsynth.observing.like_gong`; keys given explicitly win).
     instrument : `~gongsynth.GONGInstrument`
         The instrument.
 
@@ -331,7 +264,7 @@ class SimulationConfig:
     detector_shape: int | None = None
     resolutions: tuple = (1, 2, 4, 8)
     obstime: str = DEFAULT_OBSTIME
-    sun: str = "milne-eddington"
+    sun: str | None = None
     photosphere_shape: tuple | None = None
     photosphere_pixel_size: u.Quantity | None = None
     workers: int | None = None
@@ -343,18 +276,22 @@ class SimulationConfig:
     flat_sha256: str | None = None
     dark_file: str | None = None
     dark_sha256: str | None = None
+    site: str | None = None
+    like: str | None = None
     instrument: GONGInstrument = field(default_factory=GONGInstrument)
 
     def __post_init__(self):
+        if self.sun is None and self.mode in MODES:
+            object.__setattr__(self, "sun", default_sun(self.mode))
         if self.sun not in SUNS:
             raise ValueError(f"sun must be one of {tuple(SUNS)}, got {self.sun!r}")
         if self.sun == "model-atmosphere" and self.mode == "full-disk":
             raise ValueError("sun = 'model-atmosphere' runs in mode = 'tiled' only: the full disk maps the "
                              "'milne-eddington' Sun at every point's viewing angle")
         if self.photosphere_shape is None:
-            object.__setattr__(self, "photosphere_shape", _sun_default(self.sun, "shape"))
+            object.__setattr__(self, "photosphere_shape", run_grid_default(self.sun, "shape"))
         if self.photosphere_pixel_size is None:
-            object.__setattr__(self, "photosphere_pixel_size", _sun_default(self.sun, "pixel_size"))
+            object.__setattr__(self, "photosphere_pixel_size", run_grid_default(self.sun, "pixel_size"))
         for name, (unit, _) in _QUANTITIES.items():
             value = getattr(self, name)
             if not isinstance(value, u.Quantity) or not value.unit.is_equivalent(unit):
@@ -391,6 +328,9 @@ class SimulationConfig:
         if not isinstance(self.effects, Effects):
             raise TypeError(f"effects must be an Effects, got {type(self.effects).__name__}")
         object.__setattr__(self, "photosphere", _photosphere_knobs(dict(self.photosphere), self.sun))
+        object.__setattr__(self, "site", check_site(self.site))
+        if self.like is not None and not isinstance(self.like, str):
+            raise TypeError(f"like must be the path of a GONG FITS file or None, got {self.like!r}")
         if self.surface_field is not None and (not isinstance(self.surface_field, str) or self.mode != "full-disk"):
             raise ValueError(f"surface_field is a path (or '<array>') of a full-disk run, got "
                              f"{self.surface_field!r} with mode = {self.mode!r}")
@@ -433,9 +373,11 @@ class SimulationConfig:
         """
         Return a copy with some fields changed (validated again).
 
-        A change of ``sun`` also moves ``photosphere_shape`` and
-        ``photosphere_pixel_size`` to the new Sun's defaults where they held the
-        old Sun's defaults (and were not changed too).
+        A change of ``mode`` moves ``sun`` to the new mode's default where it
+        held the old mode's (and was not changed too).  A change of ``sun``
+        also moves ``photosphere_shape`` and ``photosphere_pixel_size`` to the
+        new Sun's defaults where they held the old Sun's defaults (and were
+        not changed too).
 
         Parameters
         ----------
@@ -446,9 +388,11 @@ class SimulationConfig:
         -------
         `SimulationConfig`
         """
+        if "mode" in changes and "sun" not in changes and self.sun == default_sun(self.mode):
+            changes["sun"] = None      # the mode's default Sun follows the mode
         if changes.get("sun", self.sun) != self.sun:
             for name, key in (("photosphere_shape", "shape"), ("photosphere_pixel_size", "pixel_size")):
-                if name not in changes and _same(getattr(self, name), _sun_default(self.sun, key)):
+                if name not in changes and _same(getattr(self, name), run_grid_default(self.sun, key)):
                     changes[name] = None
         return dataclasses.replace(self, **changes)
 
@@ -565,8 +509,11 @@ class SimulationConfig:
         for name in ("resolutions", "photosphere_shape"):
             if name in sim:
                 sim[name] = tuple(sim[name])
-        return cls(instrument=GONGInstrument.from_dict(table.get("instrument", {})),
-                   effects=Effects.from_dict(table.get("effects", {})),
+        instrument = GONGInstrument.from_dict(table.get("instrument", {}))
+        if sim.get("like") is not None:
+            sim, instrument = like_gong(sim["like"], settings=sim, instrument=instrument,
+                                        fixed_plate_scale="plate_scale" in table.get("instrument", {}))
+        return cls(instrument=instrument, effects=Effects.from_dict(table.get("effects", {})),
                    photosphere=table.get("photosphere", {}), **sim)
 
 

@@ -1,5 +1,5 @@
 """
-Atomic, non-clobbering file output.
+Atomic, non-clobbering file output, and fingerprints of input files.
 
 Every file gongsynth writes goes to a temporary name in the destination
 directory and is renamed into place only once complete, so an interrupted
@@ -8,12 +8,16 @@ when the caller asks for it.  The temporary name keeps the destination's
 suffix, so writers that choose the format from it (``GenericMap.save``,
 ``Figure.savefig``, astropy's ``.gz`` compression) write what the final name says.
 """
+import hashlib
 import os
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
 
-__all__ = ["atomic_path", "check_writable"]
+import astropy.units as u
+import numpy as np
+
+__all__ = ["atomic_path", "check_writable", "fingerprint"]
 
 
 def check_writable(paths, overwrite):
@@ -98,3 +102,35 @@ def atomic_path(path, *, overwrite=False):
     finally:
         if tmp.exists():
             tmp.unlink()
+
+
+def fingerprint(data):
+    """
+    SHA-256 of a detector map given as a FITS path or an array (values and unit).
+
+    Parameters
+    ----------
+    data : path-like, array_like or `~astropy.units.Quantity`
+
+    Returns
+    -------
+    str
+        Hex digest.
+
+    Examples
+    --------
+    >>> fingerprint([1.0, 2.0]) == fingerprint(np.array([1.0, 2.0]))
+    True
+    """
+    digest = hashlib.sha256()
+    if isinstance(data, (str, Path)):
+        with open(data, "rb") as handle:
+            for block in iter(lambda: handle.read(1 << 20), b""):
+                digest.update(block)
+        return digest.hexdigest()
+    unit = data.unit.to_string() if isinstance(data, u.Quantity) else ""
+    values = np.ascontiguousarray(u.Quantity(data).value if unit else np.asarray(data), dtype=np.float64)
+    digest.update(repr(values.shape).encode())
+    digest.update(values.tobytes())
+    digest.update(unit.encode())
+    return digest.hexdigest()

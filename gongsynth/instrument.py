@@ -89,7 +89,10 @@ class GONGInstrument:
     aperture : `~astropy.units.Quantity`, length
         Effective aperture diameter D = 2.8 cm (paper, Sec. 2).
     plate_scale : `~astropy.units.Quantity`, angle
-        Detector pixel size on the sky, 2.5 arcsec (paper, Sec. 2).
+        Detector pixel size on the sky, 2.5 arcsec (paper, Sec. 2).  Real GONG
+        files differ by site: 2.561″ (Big Bear, 2009: disk radius 371.7 px)
+        and 2.533″ (Learmonth, 2025); a run ``like`` a real file takes that
+        file's (`gongsynth.observing.like_gong`).
     detector_shape : int
         Detector side in pixels, 860 (GONG full-disk images are 860 × 860).
     supersampling : int

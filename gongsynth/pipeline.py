@@ -15,7 +15,8 @@ import astropy.units as u
 import numpy as np
 
 from gongsynth.chain import build_chain
-from gongsynth.config import IN_MEMORY, Effects, SimulationConfig, fingerprint
+from gongsynth.config import IN_MEMORY, Effects, SimulationConfig
+from gongsynth.files import fingerprint
 from gongsynth.optional import import_optional
 from gongsynth.resources import check_resources
 from gongsynth.sun.atmosphere import Atmosphere
@@ -122,7 +123,8 @@ class Sweep(list):
     >>> import astropy.units as u
     >>> sweep = simulate_many(latitudes=[0, 45] * u.deg, seed=2, detector_shape=16,
     ...                       duration=1 * u.min, resolutions=(1,), photosphere_shape=(64, 64),
-    ...                       photosphere_pixel_size=1536 * u.km, progress=False)
+    ...                       photosphere_pixel_size=1536 * u.km, sun="milne-eddington",
+    ...                      progress=False)
     >>> len(sweep.map_sequence("magnetogram"))
     2
     """
@@ -149,7 +151,7 @@ class Sweep(list):
 
 def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="blocks", seed=None,
              instrument=None, mode="tiled", detector_shape=None, resolutions=(1, 2, 4, 8),
-             obstime=None, sun="milne-eddington", photosphere_shape=None, photosphere_pixel_size=None,
+             obstime=None, sun=None, photosphere_shape=None, photosphere_pixel_size=None,
              effects=None, photosphere=None, flat=None, dark=None, workers=None, progress=True,
              config=None, surface_field=None):
     """
@@ -179,12 +181,14 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="bl
         Tiled mode: tile magnification of each quadrant.
     obstime : str or `~astropy.time.Time`, optional
         Observation time (default: a date with B0 ≈ 0).
-    sun : {"milne-eddington", "model-atmosphere"}
-        The built-in Sun (used when ``stokes`` is None): the column photosphere
-        through Milne-Eddington synthesis (fast; one line strength everywhere,
-        a toy for calibration), or the 3-D model atmosphere
-        (`gongsynth.sun.model_atmosphere.model_atmosphere`) through LTE
-        radiative transfer along the rays at ``latitude`` (tiled mode only).
+    sun : {"model-atmosphere", "milne-eddington"}, optional
+        The built-in Sun (used when ``stokes`` is None): the 3-D model
+        atmosphere (`gongsynth.sun.model_atmosphere.model_atmosphere`) through
+        LTE radiative transfer along the rays at ``latitude`` (tiled mode
+        only), or the column photosphere through Milne-Eddington synthesis
+        (fast; one line strength everywhere, a toy for calibration).
+        Default: the 3-D model in tiled mode, the columns over the full disk
+        (`gongsynth.suns.default_sun`).
     photosphere_shape : tuple of int, optional
         Columns of the built-in Sun (default: 1024 × 1024 for
         ``"milne-eddington"``, the model atmosphere's own default otherwise).
@@ -222,13 +226,14 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="bl
 
     Examples
     --------
-    A small, quick run (the defaults simulate GONG's full 860 × 860 detector
-    for 10 minutes):
+    A small, quick run with the fast Milne–Eddington toy Sun (the defaults
+    simulate the 3-D model Sun on GONG's full 860 × 860 detector for 10
+    minutes):
 
     >>> import astropy.units as u
     >>> result = simulate(duration=1 * u.min, detector_shape=16, resolutions=(1,), seed=1,
     ...                   photosphere_shape=(64, 64), photosphere_pixel_size=1536 * u.km,
-    ...                   progress=False)
+    ...                   sun="milne-eddington", progress=False)
     >>> result.magnetogram.unit, result.magnetogram.data.shape, result.config.seed
     (Unit("G"), (16, 16), 1)
     """
@@ -369,7 +374,8 @@ def simulate_many(*, latitudes=(0, 25, 45, 60, 70, 75) * u.deg, seeds=None, conf
     >>> import astropy.units as u
     >>> runs = simulate_many(latitudes=[0, 45] * u.deg, seed=2, detector_shape=16,
     ...                      duration=1 * u.min, resolutions=(1,), photosphere_shape=(64, 64),
-    ...                      photosphere_pixel_size=1536 * u.km, progress=False)
+    ...                      photosphere_pixel_size=1536 * u.km, sun="milne-eddington",
+    ...                      progress=False)
     >>> [float(r.config.latitude.value) for r in runs], runs[0].config.seed == runs[1].config.seed
     ([0.0, 45.0], True)
     """

@@ -93,7 +93,8 @@ def test_a_small_sweep_builds_a_table():
     from gongsynth.calibration_sweep import build_calibration_table
 
     table = build_calibration_table([0, 60] * u.deg, seeds=[1, 2], regions=["quiet"], n_boot=10,
-                                    detector_shape=96, duration=1 * u.min, progress=False)
+                                    sun="milne-eddington", detector_shape=96, duration=1 * u.min,
+                                    progress=False)
     assert list(table["latitude"].to_value(u.deg)) == [0.0, 60.0]
     assert table["mu"][1] == pytest.approx(0.5, abs=0.1)
     assert np.all(table["factor"] > 0) and np.all(table["uncertainty"] > 0)
@@ -155,7 +156,8 @@ def test_same_seeds_same_table():
 
     def build():
         return build_calibration_table([30] * u.deg, seeds=[3], regions=["quiet"], n_boot=5,
-                                       detector_shape=96, duration=1 * u.min, photosphere_shape=(128, 128),
+                                       sun="milne-eddington", detector_shape=96, duration=1 * u.min,
+                                       photosphere_shape=(128, 128),
                                        photosphere_pixel_size=768 * u.km, progress=False)
 
     first, second = build(), build()

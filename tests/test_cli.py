@@ -52,8 +52,8 @@ def test_console_script_runs():
 def test_effect_switches_and_obstime_reach_the_saved_config(tmp_path):
     import astropy.units as u
 
-    cfg = SimulationConfig(seed=1, detector_shape=16, resolutions=(1,), duration=1 * u.min,
-                           photosphere_shape=(64, 64), photosphere_pixel_size=1536 * u.km)
+    cfg = SimulationConfig(seed=1, sun="milne-eddington", detector_shape=16, resolutions=(1,),
+                           duration=1 * u.min, photosphere_shape=(64, 64), photosphere_pixel_size=1536 * u.km)
     path = tmp_path / "run.toml"
     path.write_text(cfg.to_toml())
     out = tmp_path / "o"
@@ -116,3 +116,30 @@ def test_a_muram_snapshot_as_the_input_sun(tmp_path, capsys):
     again = sunpy.map.Map(tmp_path / "again" / "magnetogram.fits")
     assert np.array_equal(again.data, magnetogram.data, equal_nan=True)
     assert main(["simulate", "--atmosphere", str(tmp_path / "none.h5"), "--out", str(tmp_path / "x")]) == 2
+
+
+def test_date_site_and_like_flags(tmp_path, capsys):
+    import astropy.units as u
+
+    from gongsynth.cli import build_parser
+
+    from .realdata import real_file
+
+    args = build_parser().parse_args(["simulate", "--date", "2014-04-01T12:00", "--out", "o"])
+    assert args.obstime == "2014-04-01T12:00"  # --date is --obstime
+    assert main(["simulate", "--site", "XX", "--out", str(tmp_path / "bad")]) == 2
+    assert "site" in capsys.readouterr().err and not (tmp_path / "bad").exists()
+    # "What GONG saw at Big Bear on 2009-09-05 18:54": the saved run records the file, its date,
+    # site and plate scale; --site still wins over the file.
+    cfg = SimulationConfig(seed=1, detector_shape=16, resolutions=(1,), duration=1 * u.min,
+                           photosphere_shape=(64, 64), photosphere_pixel_size=1536 * u.km)
+    path = tmp_path / "run.toml"
+    path.write_text(cfg.to_toml())
+    big_bear = real_file("gong/bbbqa090905t1854.fits.gz")
+    out = tmp_path / "o"
+    assert main(["simulate", "--config", str(path), "--like", str(big_bear), "--site", "ml",
+                 "--out", str(out), "--quiet"]) == 0
+    saved = SimulationConfig.from_toml(out / "config.toml")
+    assert saved.like == str(big_bear) and saved.site == "ML"
+    assert saved.obstime.startswith("2009-09-05T18:54:16")
+    assert abs(saved.instrument.plate_scale.to_value(u.arcsec) - 2.5613) < 1e-3

@@ -70,14 +70,28 @@ def test_flat_record_needs_both_path_and_digest():
 
 
 def test_the_built_in_sun_and_its_defaults():
-    """Shape and spacing default to the chosen Sun's builder; a change of Sun moves them along."""
-    from gongsynth.config import SUNS, photosphere_defaults
-    me = SimulationConfig(seed=1)
+    """Shape and spacing default to the chosen Sun's builder; a change of Sun moves them along; the
+    default Sun is the 3-D model in tiled mode and the columns over the full disk, and follows the mode."""
+    from gongsynth.suns import RUN_GRIDS, SUNS, photosphere_defaults
+    default = SimulationConfig(seed=1)
+    assert default.sun == "model-atmosphere"
+    me = default.replace(sun="milne-eddington")
     assert me.sun == "milne-eddington" and me.photosphere_shape == (1024, 1024)
+    assert me.replace(sun="model-atmosphere") == default
+    disk = default.replace(mode="full-disk")
+    assert disk.sun == "milne-eddington" and disk.photosphere_shape == (1024, 1024)
+    assert disk.replace(mode="tiled") == default
+    assert SimulationConfig(seed=1, mode="full-disk") == disk
+    assert SimulationConfig.from_toml(disk.to_toml()) == disk
+    with pytest.raises(ValueError, match="'tiled' only"):
+        SimulationConfig(sun="model-atmosphere", mode="full-disk")
     atm = me.replace(sun="model-atmosphere")
+    assert atm.photosphere_shape == RUN_GRIDS["model-atmosphere"]["shape"] == (256, 256)
+    assert atm.photosphere_pixel_size == RUN_GRIDS["model-atmosphere"]["pixel_size"]
+    # 98 Mm: the builder's own default box (1024 columns of 96 km), at a quarter of the resolution.
     signature = inspect.signature(SUNS["model-atmosphere"]).parameters
-    assert atm.photosphere_shape == tuple(signature["shape"].default)
-    assert atm.photosphere_pixel_size == signature["pixel_size"].default
+    box = [n * signature["pixel_size"].default for n in signature["shape"].default]
+    assert u.allclose([n * atm.photosphere_pixel_size for n in atm.photosphere_shape], box)
     assert atm.replace(sun="milne-eddington") == me
     kept = me.replace(photosphere_shape=(128, 128)).replace(sun="model-atmosphere")
     assert kept.photosphere_shape == (128, 128)             # a shape the user chose stays
@@ -89,7 +103,7 @@ def test_knobs_belong_to_the_chosen_sun():
     with pytest.raises(KeyError, match="for sun = 'model-atmosphere'"):
         SimulationConfig(sun="model-atmosphere", photosphere={"umbra_radius_km": 1})
     with pytest.raises(KeyError, match="height_range"):
-        SimulationConfig(photosphere={"height_range": ["-500 km", "600 km"]})
+        SimulationConfig(sun="milne-eddington", photosphere={"height_range": ["-500 km", "600 km"]})
     cfg = SimulationConfig(sun="model-atmosphere", photosphere={"spot": False, "element_field": "1.3 kG",
                                                                 "height_range": ["-500 km", "600 km"]})
     assert cfg.photosphere["element_field"] == 1.3 * u.kG

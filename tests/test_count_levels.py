@@ -25,7 +25,7 @@ from .realdata import load_real, real_file
 
 MAGNETOGRAM = "gong/bbbqa090905t1854.fits.gz"
 INTENSITY = "gong/bbiqa090905t1854.fits.gz"
-SMALL = dict(detector_shape=32, duration=1 * u.min, photosphere_shape=(128, 128),
+SMALL = dict(sun="milne-eddington", detector_shape=32, duration=1 * u.min, photosphere_shape=(128, 128),
              photosphere_pixel_size=768 * u.km, resolutions=(1,), progress=False)
 CENTRE, CONTINUUM = 0, 1  # rows of the table
 

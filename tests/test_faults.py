@@ -29,7 +29,8 @@ from gongsynth.products.output import SET_FILES, clean_leftovers, save_result
 
 from .realdata import REAL_DATA, real_file
 
-SMALL = dict(duration=1 * u.min, detector_shape=16, resolutions=(1,), photosphere_shape=(64, 64),
+SMALL = dict(sun="milne-eddington", duration=1 * u.min, detector_shape=16, resolutions=(1,),
+             photosphere_shape=(64, 64),
              photosphere_pixel_size=1536 * u.km)
 
 
@@ -158,7 +159,8 @@ def test_a_killed_save_is_cleaned_by_the_next_one(tmp_path):
         import astropy.units as u
         from astropy.io import fits
         from gongsynth.pipeline import simulate
-        result = simulate(seed=1, progress=False, duration=1 * u.min, detector_shape=16,
+        result = simulate(seed=1, sun="milne-eddington", progress=False, duration=1 * u.min,
+                          detector_shape=16,
                           resolutions=(1,), photosphere_shape=(64, 64),
                           photosphere_pixel_size=1536 * u.km)
         real, count = fits.HDUList.writeto, [0]
@@ -386,8 +388,8 @@ NOT_A_MAGNETOGRAM = {
 
 @pytest.fixture(scope="module")
 def simulated_magnetogram(tmp_path_factory):
-    result = simulate(seed=1, progress=False, duration=1 * u.min, detector_shape=96, resolutions=(1,),
-                      photosphere_shape=(128, 128), photosphere_pixel_size=1536 * u.km)
+    result = simulate(seed=1, sun="milne-eddington", progress=False, duration=1 * u.min, detector_shape=96,
+                      resolutions=(1,), photosphere_shape=(128, 128), photosphere_pixel_size=1536 * u.km)
     path = tmp_path_factory.mktemp("sim") / "magnetogram.fits"
     result.magnetogram.save(path)
     return path

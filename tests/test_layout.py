@@ -22,10 +22,11 @@ PACKAGE = Path(gongsynth.__file__).parent
 LAYERS = (
     ("gongsynth.version", "gongsynth._version", "gongsynth.optional", "gongsynth.validation",
      "gongsynth.seeding", "gongsynth.planes", "gongsynth.files", "gongsynth.tomlfmt",
-     "gongsynth.instrument", "gongsynth.geometry"),
+     "gongsynth.instrument", "gongsynth.geometry", "gongsynth.observing"),
     ("gongsynth.sun.rt.atomic_data", "gongsynth.sun.rt.eos", "gongsynth.sun.rt.opacity",
      "gongsynth.sun.rt.hydrostatic"),
-    ("gongsynth.sun", "gongsynth.sun.atmosphere_files", "gongsynth.sun.atmosphere"),
+    ("gongsynth.sun", "gongsynth.sun.atmosphere_files", "gongsynth.sun.atmosphere",
+     "gongsynth.sun.surface_field"),
     ("gongsynth.sun.rt", "gongsynth.sun.rt.kernels", "gongsynth.sun.rt.rays", "gongsynth.sun.rt.truth",
      "gongsynth.sun.rt.synthesis"),
     ("gongsynth.sun.model_atmosphere",),
@@ -37,7 +38,7 @@ LAYERS = (
     ("gongsynth.stages.reduction",),
     ("gongsynth.products",),
     ("gongsynth.analysis",),
-    ("gongsynth.config", "gongsynth.chain", "gongsynth.resources", "gongsynth.pipeline",
+    ("gongsynth.suns", "gongsynth.config", "gongsynth.chain", "gongsynth.resources", "gongsynth.pipeline",
      "gongsynth.calibration_sweep"),
     ("gongsynth.cli",),
 )

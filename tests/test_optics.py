@@ -299,7 +299,7 @@ def test_float32_optics_leave_b_and_v_unchanged():
     from gongsynth.chain import build_chain
     from gongsynth.config import SimulationConfig
     from gongsynth.stages.reduction import reduce
-    cfg = SimulationConfig(seed=3, detector_shape=120, photosphere_shape=(256, 256),
+    cfg = SimulationConfig(seed=3, sun="milne-eddington", detector_shape=120, photosphere_shape=(256, 256),
                            photosphere_pixel_size=384 * u.km)
     state = build_chain(cfg).run(until="scene", progress=False)
     light, truth = state["light"], state["truth_scene"]

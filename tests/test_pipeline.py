@@ -14,7 +14,7 @@ from gongsynth.config import SimulationConfig
 from gongsynth.products.maps import GONGSynthMap
 
 # A 98 Mm tile like the paper's, coarsely sampled so the tests stay fast.
-SMALL = dict(detector_shape=96, duration=1 * u.min, photosphere_shape=(256, 256),
+SMALL = dict(sun="milne-eddington", detector_shape=96, duration=1 * u.min, photosphere_shape=(256, 256),
              photosphere_pixel_size=384 * u.km, resolutions=(1,), progress=False)
 
 
@@ -226,7 +226,8 @@ def test_config_and_run_arguments_do_not_mix(disk_centre):
 
 
 def test_photosphere_knobs_reach_the_model():
-    cfg = SimulationConfig(seed=1, photosphere_shape=(64, 64), photosphere_pixel_size=1536 * u.km,
+    cfg = SimulationConfig(seed=1, sun="milne-eddington", photosphere_shape=(64, 64),
+                           photosphere_pixel_size=1536 * u.km,
                            photosphere={"spot": False, "umbra_field": "2 kG"})
     assert cfg.photosphere["umbra_field"] == 2 * u.kG
     again = SimulationConfig.from_toml(cfg.to_toml())
@@ -235,9 +236,9 @@ def test_photosphere_knobs_reach_the_model():
     without = build_chain(cfg).run(until="photosphere", progress=False)
     assert np.abs(with_spot["photosphere"].bz).max() > 2 * np.abs(without["photosphere"].bz).max()
     with pytest.raises(KeyError, match="umbra_feild"):
-        SimulationConfig(photosphere={"umbra_feild": 1 * u.kG})
+        SimulationConfig(sun="milne-eddington", photosphere={"umbra_feild": 1 * u.kG})
     with pytest.raises(u.UnitsError, match="umbra_field"):
-        SimulationConfig(photosphere={"umbra_field": 1 * u.km})
+        SimulationConfig(sun="milne-eddington", photosphere={"umbra_field": 1 * u.km})
 
 
 def test_a_user_flat_is_recorded_and_required_to_repeat(tmp_path):

@@ -143,6 +143,27 @@ def test_inclined_ray_through_a_uniform_atmosphere_is_a_stretched_vertical_one(f
     assert np.abs(slanted.I.value - ref).max() < 1e-5 * ref[0]
 
 
+def test_vertical_rays_read_each_column_as_a_plane_parallel_atmosphere(muram):
+    """rays="vertical": a column of a 3-D box gives what that column alone (periodic 1 x 1, where the
+    inclined ray can only meet itself) gives at the same mu; the inclined rays differ (they cross the
+    neighbouring structure)."""
+    box = muram[20:24, 30:33]
+    vertical = synthesize(box, mu=0.5, azimuth=-60 * u.deg, wavelength=LAM[::8], progress=False,
+                          rays="vertical")
+    inclined = synthesize(box, mu=0.5, azimuth=-60 * u.deg, wavelength=LAM[::8], progress=False)
+    assert vertical.meta["rays"] == "vertical" and inclined.meta["rays"] == "inclined"
+    for j, i in ((0, 0), (2, 1), (3, 2)):
+        alone = synthesize(box[j:j + 1, i:i + 1], mu=0.5, azimuth=-60 * u.deg, wavelength=LAM[::8],
+                           progress=False)
+        for stokes in ("I", "V"):
+            got, want = getattr(vertical, stokes).value[j, i], getattr(alone, stokes).value[0, 0]
+            assert np.abs(got - want).max() <= 1e-6 * alone.I.value[0, 0, 0]
+        assert vertical.blos.value[j, i] == pytest.approx(alone.blos.value[0, 0], rel=1e-5)
+    assert np.abs(vertical.I.value - inclined.I.value).max() > 1e-2 * inclined.I.value.mean()
+    with pytest.raises(ValueError, match="rays"):
+        synthesize(box, rays="slanted", progress=False)
+
+
 @needs_data
 def test_truth_is_the_field_along_the_line_of_sight(falc):
     atm = uniform_field(falc, 300.0, -200.0, 800.0)

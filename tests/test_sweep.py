@@ -5,7 +5,7 @@ import pytest
 
 import gongsynth
 
-TINY = dict(detector_shape=24, duration=1 * u.min, photosphere_shape=(128, 128),
+TINY = dict(sun="milne-eddington", detector_shape=24, duration=1 * u.min, photosphere_shape=(128, 128),
             photosphere_pixel_size=768 * u.km, resolutions=(1,), seed=21)
 LATITUDES = [0, 25, 45, 60, 70, 75] * u.deg
 

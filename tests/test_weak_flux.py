@@ -8,6 +8,7 @@ from gongsynth.analysis.weak_flux import (
     flux_conserving_fit,
     paper_regions,
     weak_flux_factor,
+    weak_flux_factor_difference,
 )
 
 
@@ -70,7 +71,8 @@ def test_bad_input():
 def test_regions_and_factor_of_a_simulation():
     import gongsynth
 
-    result = gongsynth.simulate(seed=4, detector_shape=160, duration=1 * u.min, progress=False)
+    result = gongsynth.simulate(seed=4, detector_shape=160, duration=1 * u.min, sun="milne-eddington",
+                                progress=False)
     quiet, spot = paper_regions(result.magnetogram, result.continuum, usable=result.resolution_map == 1)
     assert quiet.any() and spot.any() and not (quiet & spot).any()
     assert np.all(np.abs(result.magnetogram.data[quiet]) < 400)
@@ -83,3 +85,28 @@ def test_regions_and_factor_of_a_simulation():
     assert factor.factor > 0 and np.isfinite(factor.uncertainty) and factor.uncertainty > 0
     with pytest.raises(ValueError, match="region"):
         weak_flux_factor(result, region="plage")
+
+
+def test_paired_difference_of_two_runs():
+    """Same pixels, truth scaled by 1.5: the factor scales exactly (the fit is linear in the truth, to
+    float32 round-off), and the paired bootstrap sees the same blocks as the single one, so both numbers
+    are known; identical runs differ by exactly zero."""
+    import dataclasses
+
+    import sunpy.map
+
+    import gongsynth
+
+    result = gongsynth.simulate(seed=5, detector_shape=96, duration=1 * u.min, sun="milne-eddington",
+                                resolutions=(1,), progress=False)
+    single = weak_flux_factor(result, n_boot=20)
+    truth = result.truth_psf
+    scaled = dataclasses.replace(result, truth_psf=sunpy.map.Map(truth.data * 1.5, truth.meta))
+    difference, uncertainty = weak_flux_factor_difference(result, scaled, n_boot=20)
+    assert difference == pytest.approx(0.5 * single.factor, rel=1e-6)     # the maps are float32
+    assert uncertainty == pytest.approx(0.5 * single.uncertainty, rel=1e-6)
+    assert weak_flux_factor_difference(result, result, n_boot=20) == (0.0, 0.0)
+    other = gongsynth.simulate(seed=5, detector_shape=96, duration=1 * u.min, latitude=30 * u.deg,
+                               sun="milne-eddington", resolutions=(1,), progress=False)
+    with pytest.raises(ValueError, match="latitude"):
+        weak_flux_factor_difference(result, other)

@@ -358,7 +358,8 @@ def calibration_vs_latitude(results, **kwargs):
     >>> from gongsynth import simulate_many
     >>> runs = simulate_many(latitudes=[0, 60] * u.deg, seed=1, detector_shape=16,
     ...                      duration=1 * u.min, resolutions=(1,), photosphere_shape=(64, 64),
-    ...                      photosphere_pixel_size=1536 * u.km, progress=False)
+    ...                      photosphere_pixel_size=1536 * u.km, sun="milne-eddington",
+    ...                      progress=False)
     >>> latitude, curves = calibration_vs_latitude(runs, threshold=50 * u.G, n_boot=5)
     >>> latitude
     <Quantity [ 0., 60.] deg>

@@ -43,7 +43,8 @@ from gongsynth.analysis.calibration import gauss_values
 from gongsynth.seeding import stage_generator
 
 __all__ = ["PAPER_BINS", "QUIET_LIMIT", "FluxConservingCurve", "WeakFluxFactor",
-           "flux_conserving_fit", "paper_bins", "paper_regions", "region_pixels", "weak_flux_factor"]
+           "flux_conserving_fit", "paper_bins", "paper_regions", "region_pixels", "weak_flux_factor",
+           "weak_flux_factor_difference"]
 
 #: The authors' numbers of bins per viewing angle (deg): (quiet Sun, sunspot).
 PAPER_BINS = {0: (35, 21), 25: (21, 9), 45: (15, 7), 60: (9, 7), 70: (7, 7), 75: (7, 7)}
@@ -357,34 +358,11 @@ def weak_flux_factor(results, *, region="quiet", n_bins=None, min_outer=400, n_b
     -------
     `WeakFluxFactor`
     """
-    results = [results] if hasattr(results, "magnetogram") else list(results)
-    if not results:
-        raise ValueError("results is empty")
-    latitude = u.Quantity(results[0].config.latitude, u.deg)
-    if any(u.Quantity(r.config.latitude, u.deg) != latitude for r in results):
-        raise ValueError("pooled results must share one latitude, got "
-                         f"{[str(r.config.latitude) for r in results]}")
+    m, t, labels, latitude = _pooled(results, region, psf, block)
     n_bins = paper_bins(latitude, region) if n_bins is None else n_bins
-    measured, truth, labels = [], [], []
-    for number, result in enumerate(results):
-        m, t, rows, columns = region_pixels(result, region, psf=psf)
-        measured.append(m)
-        truth.append(t)
-        # Bootstrap blocks never span two runs.
-        labels.append((number * 100_003 + rows // block) * 100_003 + columns // block)
-    m, t, labels = np.concatenate(measured), np.concatenate(truth), np.concatenate(labels)
     curve = flux_conserving_fit(m, t, n_bins, min_outer=min_outer)
-
-    # Block bootstrap: resample whole blocks of pixels with replacement.
-    _, inverse = np.unique(labels, return_inverse=True)
-    members = np.argsort(inverse, kind="stable")
-    starts = np.searchsorted(inverse[members], np.arange(inverse.max() + 2))
-    n_blocks = starts.size - 1
-    rng = stage_generator(seed, "weak-flux-bootstrap")
     factors = []
-    for _ in range(n_boot):
-        picked = rng.integers(0, n_blocks, n_blocks)
-        index = np.concatenate([members[starts[k]:starts[k + 1]] for k in picked])
+    for index in _block_resamples(labels, n_boot, seed):
         try:
             resampled = flux_conserving_fit(m[index], t[index], n_bins, min_outer=min_outer)
         except ValueError:  # a resample too small for the bins: skip it
@@ -393,3 +371,86 @@ def weak_flux_factor(results, *, region="quiet", n_bins=None, min_outer=400, n_b
     uncertainty = float(np.std(factors, ddof=1)) if len(factors) > 1 else float("nan")
     return WeakFluxFactor(factor=curve.slope_at_zero, uncertainty=uncertainty, curve=curve, region=region,
                           n_pixels=int(m.size), latitude=latitude)
+
+
+def weak_flux_factor_difference(first, second, *, region="quiet", n_bins=None, min_outer=400, n_boot=50,
+                                block=4, seed=0, psf=True):
+    """
+    The change of the weak-flux factor between two sets of runs of the same field, with its uncertainty.
+
+    For ablations: the same seeds and pointing with one ingredient changed
+    (e.g. the kG elements' temperature).  The two fits are bootstrapped
+    together — each resample draws the same blocks of sky from both — so the
+    structure and noise the two sets share cancel in the uncertainty, which
+    two separate bootstraps would add instead.
+
+    Parameters
+    ----------
+    first, second : `~gongsynth.pipeline.SimulationResult` or sequence of them
+        Runs at one latitude, paired in order (same detector shape).
+    region, n_bins, min_outer, n_boot, block, seed, psf
+        As for `weak_flux_factor`.
+
+    Returns
+    -------
+    difference : float
+        Factor of ``second`` minus factor of ``first``.
+    uncertainty : float
+        Standard deviation of that difference over the paired block bootstrap.
+    """
+    pooled = [_pooled(runs, region, psf, block) for runs in (first, second)]
+    if pooled[0][3] != pooled[1][3]:
+        raise ValueError(f"the two sets must share one latitude, got {pooled[0][3]} and {pooled[1][3]}")
+    n_bins = paper_bins(pooled[0][3], region) if n_bins is None else n_bins
+    factors = [flux_conserving_fit(m, t, n_bins, min_outer=min_outer).slope_at_zero for m, t, _, _ in pooled]
+    # Blocks are named by run number and position, so one draw of names picks the same sky in both sets.
+    names = np.union1d(pooled[0][2], pooled[1][2])
+    rng = stage_generator(seed, "weak-flux-bootstrap")
+    differences = []
+    for _ in range(n_boot):
+        counts = np.bincount(rng.integers(0, names.size, names.size), minlength=names.size)
+        try:
+            pair = [flux_conserving_fit(*_with_counts(m, t, labels, names, counts), n_bins,
+                                        min_outer=min_outer).slope_at_zero for m, t, labels, _ in pooled]
+        except ValueError:
+            continue
+        differences.append(pair[1] - pair[0])
+    uncertainty = float(np.std(differences, ddof=1)) if len(differences) > 1 else float("nan")
+    return factors[1] - factors[0], uncertainty
+
+
+def _pooled(results, region, psf, block):
+    """The region's pixels of one or several runs at one latitude, with bootstrap block names."""
+    results = [results] if hasattr(results, "magnetogram") else list(results)
+    if not results:
+        raise ValueError("results is empty")
+    latitude = u.Quantity(results[0].config.latitude, u.deg)
+    if any(u.Quantity(r.config.latitude, u.deg) != latitude for r in results):
+        raise ValueError("pooled results must share one latitude, got "
+                         f"{[str(r.config.latitude) for r in results]}")
+    measured, truth, labels = [], [], []
+    for number, result in enumerate(results):
+        m, t, rows, columns = region_pixels(result, region, psf=psf)
+        measured.append(m)
+        truth.append(t)
+        # Bootstrap blocks never span two runs.
+        labels.append((number * 100_003 + rows // block) * 100_003 + columns // block)
+    return np.concatenate(measured), np.concatenate(truth), np.concatenate(labels), latitude
+
+
+def _block_resamples(labels, n_boot, seed):
+    """Pixel indices of ``n_boot`` block-bootstrap resamples (whole blocks drawn with replacement)."""
+    _, inverse = np.unique(labels, return_inverse=True)
+    members = np.argsort(inverse, kind="stable")
+    starts = np.searchsorted(inverse[members], np.arange(inverse.max() + 2))
+    n_blocks = starts.size - 1
+    rng = stage_generator(seed, "weak-flux-bootstrap")
+    for _ in range(n_boot):
+        picked = rng.integers(0, n_blocks, n_blocks)
+        yield np.concatenate([members[starts[k]:starts[k + 1]] for k in picked])
+
+
+def _with_counts(measured, truth, labels, names, counts):
+    """Each pixel repeated as often as its block was drawn."""
+    repeat = counts[np.searchsorted(names, labels)]
+    return np.repeat(measured, repeat), np.repeat(truth, repeat)

@@ -175,7 +175,7 @@ def save_result(result, directory, *, overwrite=False, quicklook=True):
     >>> from gongsynth import simulate
     >>> result = simulate(duration=1 * u.min, detector_shape=16, resolutions=(1,), seed=1,
     ...                   photosphere_shape=(64, 64), photosphere_pixel_size=1536 * u.km,
-    ...                   progress=False)
+    ...                   sun="milne-eddington", progress=False)
     >>> paths = save_result(result, tempfile.mkdtemp(), quicklook=False)
     >>> sorted(p.name for p in paths)[:3]
     ['config.toml', 'continuum.fits', 'doppler.fits']

@@ -168,7 +168,7 @@ def quicklook_figure(result):
     >>> from gongsynth import simulate
     >>> result = simulate(duration=1 * u.min, detector_shape=16, resolutions=(1,), seed=1,
     ...                   photosphere_shape=(64, 64), photosphere_pixel_size=1536 * u.km,
-    ...                   progress=False)
+    ...                   sun="milne-eddington", progress=False)
     >>> len(quicklook_figure(result).axes)   # five maps, their colour bars and the histograms
     11
     """

@@ -200,7 +200,7 @@ def _fraction(value, name, lo=0.0, hi=1.0):
     return float(value)
 
 
-def model_atmosphere(shape=(256, 256), pixel_size=96 * u.km, *, seed, nz=80,
+def model_atmosphere(shape=(1024, 1024), pixel_size=96 * u.km, *, seed, nz=80,
                      height_range=(-600, 700) * u.km, spot="auto", granule_size=1.3 * u.Mm,
                      granulation_models="brc", granulation_amplitude=1.5,
                      granulation_velocity=2.0 * u.km / u.s, velocity_decay_height=250 * u.km,
@@ -220,7 +220,9 @@ def model_atmosphere(shape=(256, 256), pixel_size=96 * u.km, *, seed, nz=80,
     Parameters
     ----------
     shape : tuple of int, optional
-        (ny, nx) columns (default 256 × 256).
+        (ny, nx) columns (default 1024 × 1024: 98 Mm, the papers' MURaM box
+        binned to 96 km; a run's default is coarser, see
+        `gongsynth.suns.RUN_GRIDS`).
     pixel_size : `~astropy.units.Quantity`, optional
         Horizontal spacing (default 96 km).
     seed : int, `numpy.random.SeedSequence` or `numpy.random.Generator`

@@ -89,7 +89,7 @@ def reference_height(atmosphere, line=None, max_columns=4096):
 
 @u.quantity_input(azimuth=u.deg)
 def synthesize(atmosphere, *, mu=1.0, azimuth=0 * u.deg, wavelength=None, truth="paper", progress=True,
-               line=None):
+               line=None, rays="inclined"):
     """
     Polarised LTE synthesis of Ni I 676.78 nm along (inclined) rays through an Atmosphere.
 
@@ -112,6 +112,13 @@ def synthesize(atmosphere, *, mu=1.0, azimuth=0 * u.deg, wavelength=None, truth=
         Show a progress bar over blocks of rays.
     line : `~gongsynth.sun.rt.atomic_data.NiLineData`, optional
         Atomic data (default `NiLineData()`: g = 1.5).
+    rays : {"inclined", "vertical"}, optional
+        ``"inclined"`` (default): each ray crosses the 3-D box along the line
+        of sight.  ``"vertical"``: each ray stays inside its own column, read
+        as a plane-parallel atmosphere seen at ``mu`` (the 1.5-D
+        approximation: path lengths dz/μ and the field projected on the line
+        of sight as before, but no crossing of neighbouring structure) — an
+        ablation, to measure what the inclined rays do.
 
     Returns
     -------
@@ -148,12 +155,15 @@ def synthesize(atmosphere, *, mu=1.0, azimuth=0 * u.deg, wavelength=None, truth=
     if np.ndim(mu_value) or np.ndim(az):
         raise ValueError("rt.synthesize takes one viewing geometry (scalar mu and azimuth) per call")
     mu_value, az = float(mu_value), float(az)
+    if rays not in ("inclined", "vertical"):
+        raise ValueError(f"rays must be 'inclined' or 'vertical', got {rays!r}")
     scale, level, offset, half, nsamp = truth_definition(truth)
     const, pf = line_constants(line)
     nz, ny, nx = atmosphere.shape
     z_km = atmosphere.z.to_value(u.km)
-    z_ref = reference_height(atmosphere, line) if mu_value < 1 else float("nan")
-    dx, dy = ray_offsets(z_km, 0.0 if mu_value == 1 else z_ref, mu_value, az,
+    inclined = mu_value < 1 and rays == "inclined"
+    z_ref = reference_height(atmosphere, line) if inclined else float("nan")
+    dx, dy = ray_offsets(z_km, z_ref if inclined else 0.0, mu_value if inclined else 1.0, az,
                          atmosphere.pixel_size.to_value(u.km))
     ds = np.diff(z_km) * 1e5 / mu_value
     n, e1, e2 = los_basis(mu_value, az)
@@ -205,7 +215,7 @@ def synthesize(atmosphere, *, mu=1.0, azimuth=0 * u.deg, wavelength=None, truth=
         blos[sl] = tb.reshape(rows.size, nx)
         anchor[sl] = th.reshape(rows.size, nx)
     meta = {"origin": "gongsynth.rt.synthesize", "method": "LTE, DELO-linear, Ni I 676.78 nm",
-            "mu": mu_value, "los_azimuth_deg": float(np.degrees(az)), "truth": str(truth),
+            "mu": mu_value, "los_azimuth_deg": float(np.degrees(az)), "truth": str(truth), "rays": rays,
             "reference_height_km": z_ref, "truth_anchor_mean_km": float(anchor.mean()),
             "lande_g": float(line.lande_g), "atmosphere": dict(atmosphere.meta)}
     return StokesCube(*(u.Quantity(a, RADIANCE_UNIT, copy=False) for a in out), wavelength,
