@@ -35,6 +35,7 @@ import numpy as np
 from sunpy import log
 
 from gongsynth.geometry import Pointing, disk_geometry
+from gongsynth.observing import site_location
 from gongsynth.products.maps import PRODUCTS, make_product_map
 from gongsynth.seeding import child_sequence
 from gongsynth.stages import optics
@@ -50,7 +51,8 @@ from gongsynth.sun.rt.synthesis import synthesize as rt_synthesize
 from gongsynth.sun.sampling import check_spectral_sampling
 from gongsynth.suns import SUNS
 
-__all__ = ["Stage", "Chain", "build_chain", "interactive", "run_header", "unmeasured", "SKY_FRACTION"]
+__all__ = ["Stage", "Chain", "build_chain", "interactive", "run_header", "unmeasured", "large_scale_field",
+           "SKY_FRACTION"]
 
 #: A pixel whose light is below this fraction of the brightest pixel's is too
 #: faint for a phase: every product is blanked there (see `unmeasured`).
@@ -249,8 +251,9 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
         def disk_scene(photosphere):
             light, truth = full_disk_scene(photosphere, detector_shape=config.detector_pixels,
                                            obstime=config.obstime, instrument=inst, progress=progress,
-                                           surface_field=surface_field,
-                                           seed=child_sequence(config.seed, "scene"))
+                                           surface_field=large_scale_field(config, surface_field),
+                                           seed=child_sequence(config.seed, "scene"),
+                                           site=site_location(config.site))
             return {"light": light, "truth_scene": truth}
 
         stages.append(Stage("scene", ("photosphere",), ("light", "truth_scene"), disk_scene,
@@ -342,6 +345,38 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
                         tuple(f"{p}_map" for p in PRODUCTS), maps,
                         "sunpy Maps with helioprojective WCS; sky blanked"))
     return stages
+
+
+def large_scale_field(config, given=None):
+    """
+    The surface field a full-disk run follows (`gongsynth.sun.surface_field`).
+
+    Parameters
+    ----------
+    config : `~gongsynth.config.SimulationConfig`
+        ``surface_field = "synthetic"``: the seeded synthetic Sun at the run's
+        date (stream ``"surface-field"`` of the run's seed).
+    given : `sunpy.map.GenericMap`, optional
+        A map: a gongsynth surface field is used as it is; any other map (a
+        full-disk magnetogram, a synoptic map) goes through
+        `~gongsynth.sun.surface_field.surface_field_from_map` at the run's date.
+
+    Returns
+    -------
+    `sunpy.map.GenericMap` or None
+        None: the quiet Sun.
+    """
+    from gongsynth.sun.surface_field import surface_field_from_map, synthetic_surface_field
+    from gongsynth.sun.surface_field.maps import check_surface_field
+    if given is None:
+        if config.surface_field == "synthetic":
+            return synthetic_surface_field(config.obstime, seed=child_sequence(config.seed, "surface-field"))
+        return None
+    try:
+        check_surface_field(given)
+        return given
+    except ValueError:
+        return surface_field_from_map(given, config.obstime)
 
 
 def unmeasured(expected_counts, config):

@@ -216,9 +216,12 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="bl
         TypeError), only with ``stokes``, ``flat``, ``dark``, ``progress``
         and ``surface_field``.
     surface_field : `sunpy.map.GenericMap` or path-like, optional
-        Full-disk mode: a heliographic map of the Sun's radial flux density
-        B_r (G) that the small scales follow, or its FITS path (recorded in
-        the config as ``surface_field``); default the quiet Sun.
+        Full-disk mode: the Sun's large-scale radial field that the small
+        scales follow: a `gongsynth.sun.surface_field` map, any magnetogram
+        or synoptic map (remapped by `~gongsynth.sun.surface_field.surface_field_from_map`
+        to the run's date), or a FITS path of one (recorded in the config as
+        ``surface_field``; ``surface_field="synthetic"`` in the config: the
+        seeded synthetic Sun of the run's date); default the quiet Sun.
 
     Returns
     -------
@@ -314,7 +317,7 @@ def _surface_field(config, given):
     import sunpy.map
     recorded = config.surface_field
     if given is None:
-        if recorded is None:
+        if recorded is None or recorded == "synthetic":   # the chain builds the synthetic Sun
             return config, None
         if recorded == IN_MEMORY:
             raise ValueError("this configuration's surface field was a map passed in memory "

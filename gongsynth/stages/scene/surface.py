@@ -4,11 +4,14 @@ The large scales of a full-disk scene on a heliographic grid: the radial field a
 `large_scale_grid` puts on one regular Stonyhurst (longitude, latitude) grid,
 for the run's date and observer:
 
-- the radial flux density B_r of a heliographic `sunpy.map.Map` (Carrington
-  or Stonyhurst, any projection its WCS describes, e.g. the GONG synoptic
-  maps' CEA or plate carrée), sampled at the grid points through the map's
-  WCS (bilinear); pixels the map does not know (NaN, or outside it) are 0:
-  the quiet Sun.  No map: 0 everywhere;
+- the radial flux density B_r of a heliographic `sunpy.map.Map`: a
+  `gongsynth.sun.surface_field` map through its own
+  `~gongsynth.sun.surface_field.surface_field_at` (differential rotation
+  from the map's date to the run's), any other (Carrington or Stonyhurst,
+  any projection its WCS describes, e.g. the GONG synoptic maps' CEA or
+  plate carrée) through its WCS (bilinear, `sample_surface_field`); pixels
+  the map does not know (NaN, or outside it) are 0: the quiet Sun.  No map:
+  0 everywhere;
 - the large-scale Doppler velocity, `gongsynth.sun.rotation.disk_velocity`:
   differential rotation, the observer's motion, the convective blueshift.
 
@@ -23,6 +26,7 @@ from astropy.coordinates import SkyCoord
 
 from gongsynth.geometry import as_obstime
 from gongsynth.sun.rotation import CONVECTIVE_BLUESHIFT_FE6302, disk_velocity
+from gongsynth.sun.surface_field.maps import check_surface_field, surface_field_at
 from gongsynth.validation import check_quantity
 
 __all__ = ["LargeScale", "sample_surface_field", "large_scale_grid"]
@@ -166,7 +170,11 @@ def large_scale_grid(obstime=None, surface_field=None, *, step=0.25 * u.deg, sit
     if surface_field is None:
         field = np.zeros(glon.shape)
     else:
-        field = sample_surface_field(surface_field, glon * u.deg, glat * u.deg, time).to_value(u.G)
+        try:   # a gongsynth surface field: carried to the date by differential rotation
+            check_surface_field(surface_field)
+            field = surface_field_at(surface_field, glon * u.deg, glat * u.deg, time).to_value(u.G)
+        except (ValueError, TypeError):
+            field = sample_surface_field(surface_field, glon * u.deg, glat * u.deg, time).to_value(u.G)
         field = np.where(np.isfinite(field), field, 0.0)
     # μ of each grid point seen from the Earth at its distance (the blueshift's argument; 0 beyond the limb).
     b0 = sun.B0(time).to_value(u.rad)
