@@ -333,7 +333,8 @@ class SimulationConfig:
         object.__setattr__(self, "site", check_site(self.site))
         if self.like is not None and not isinstance(self.like, str):
             raise TypeError(f"like must be the path of a GONG FITS file or None, got {self.like!r}")
-        if self.surface_field is not None and (not isinstance(self.surface_field, str) or self.mode != "full-disk"):
+        if self.surface_field is not None and (not isinstance(self.surface_field, str)
+                                               or self.mode != "full-disk"):
             raise ValueError(f"surface_field is 'synthetic' or a path (or '<array>') of a full-disk run, got "
                              f"{self.surface_field!r} with mode = {self.mode!r}")
         for name in ("flat", "dark"):

@@ -169,7 +169,6 @@ def render_disk(light, truth, h, distance, b0, radius,
     n_v = totals.shape[0]
     size_y, size_x = ny * pixel_km, nx * pixel_km
     cb, sb = math.cos(b0), math.sin(b0)
-    obs_x, obs_z = distance * cb, distance * sb
     counts = np.zeros((big_y, 2), dtype=np.int64)
     for row in nb.prange(big_y):
         acc = np.empty(k_row)
@@ -210,7 +209,8 @@ def render_disk(light, truth, h, distance, b0, radius,
             cos_b = math.cos(b)
             ci = math.floor(radius * lon * cos_b / cell_km)
             cj = math.floor(radius * b / cell_km)
-            cell = cells[min(max(cj + cell_j0, 0), cells.shape[0] - 1), min(max(ci + cell_i0, 0), cells.shape[1] - 1)]
+            cell = cells[min(max(cj + cell_j0, 0), cells.shape[0] - 1),
+                         min(max(ci + cell_i0, 0), cells.shape[1] - 1)]
             lc, bc, ca, sa = cell[0], cell[1], cell[2], cell[3]
             xl = radius * cos_b * (lon - lc)
             yl = radius * (b - bc)

@@ -117,19 +117,22 @@ def library_scene(library, *, obstime=None, instrument=None, detector_shape=None
     basis = library.basis
     level_first = np.array([p[0] if p else -1 for p in library.level_patches], dtype=np.int64)
     level_count = np.array([max(len(p), 1) for p in library.level_patches], dtype=np.int64)
-    distance, b0, r_sun = get_earth(time).radius.to_value(u.km), sun.B0(time).to_value(u.rad), radius.to_value(u.km)
+    distance, b0 = get_earth(time).radius.to_value(u.km), sun.B0(time).to_value(u.rad)
+    r_sun = radius.to_value(u.km)
     cells, (cell_j0, cell_i0) = cell_table(r_sun, cell_km, distance, b0)
     on_disk, outside = render_disk(
         light, blos, scale.to_value(u.rad), distance, b0, r_sun,
         large.field, large.velocity, float(large.longitude[0]), float(large.latitude[0]),
         float(large.longitude[1] - large.longitude[0]),
-        cell_km, cells, cell_j0, cell_i0, _scene_seed(seed), np.radians(library.theta), np.asarray(library.line.limb_darkening, float),
+        cell_km, cells, cell_j0, cell_i0, _scene_seed(seed), np.radians(library.theta),
+        np.asarray(library.line.limb_darkening, float),
         library.level_net.astype(np.float64), level_first, level_count,
         np.asarray(library.level_uniform, dtype=np.int64), np.asarray(library.patches),
         np.asarray(library.uniform),
         library.pixel_size.to_value(u.km), bool(library.mirror_ok), int(library.n_e),
         np.asarray(library.e_index, dtype=np.int64), np.asarray(library.v_sign, dtype=np.float64),
-        basis.amplitudes, basis.totals, float(basis.velocity[0]), float(basis.velocity[1] - basis.velocity[0]),
+        basis.amplitudes, basis.totals, float(basis.velocity[0]),
+        float(basis.velocity[1] - basis.velocity[0]),
         # The basis integrates over wavelength in nm; the channel unit is per cm of spectrum × cm.
         float(to_earth.value * (1 * u.nm).to_value(u.cm)))
     if outside:
@@ -142,7 +145,8 @@ def library_scene(library, *, obstime=None, instrument=None, detector_shape=None
                 photosphere_pixel_size=library.pixel_size, cell_size=cell_km * u.km, velocities=terms,
                 on_disk_samples=int(on_disk), large_scale=large, library=repr(library))
     common = dict(boundary="zero", instrument=inst, detector_shape=det, centre=centre)
-    truth = Scene(u.Quantity(blos, u.G, copy=False), scale, header, meta={**meta, "quantity": "blos"}, **common)
+    truth = Scene(u.Quantity(blos, u.G, copy=False), scale, header, meta={**meta, "quantity": "blos"},
+                  **common)
     light_scene = Scene(u.Quantity(light, to_earth.unit, copy=False), scale, header, blos=truth.data,
                         meta={**meta, "quantity": "radiance"}, **common)
     return light_scene, truth

@@ -126,7 +126,7 @@ def full_disk_scene(source, *, obstime=None, instrument=None, detector_shape=Non
 
     Parameters
     ----------
-    source : `~gongsynth.stages.scene.library.PatchLibrary`, `~gongsynth.sun.photosphere.Photosphere` or sequence of `~gongsynth.sun.stokes.StokesCube`
+    source : `~gongsynth.stages.scene.library.PatchLibrary`, `~gongsynth.sun.photosphere.Photosphere` or list
         A patch library (`gongsynth.stages.scene.library.build_library`): the
         Sun's large-scale field from ``surface_field`` filled with the
         library's small scales, rotation and the observer's motion in the

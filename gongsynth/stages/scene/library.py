@@ -1,5 +1,5 @@
 r"""
-The full disk's small scales: a library of photosphere patches, their spectra collapsed at a set of viewing angles.
+The full disk's small scales: photosphere patches, their spectra collapsed at a set of viewing angles.
 
 A full-disk scene needs, at each of ~11 million samples, the six channel values
 of the photosphere below it seen at its own μ and azimuth and Doppler shifted
@@ -330,7 +330,8 @@ def build_library(*, seed=0, shape=(256, 256), pixel_size=384 * u.km, seeds_per_
     net[0] = 0.0
     if np.any(np.diff(net) <= 0):
         raise ValueError(f"the levels' net flux densities must increase, got {np.round(net, 2).tolist()} G")
-    meta = {"levels": names, "seed_entropy": str(root.entropy), "knobs": {k: str(v) for k, v in knobs.items()},
+    meta = {"levels": names, "seed_entropy": str(root.entropy),
+            "knobs": {k: str(v) for k, v in knobs.items()},
             "seeds_per_level": list(seeds_per_level), "patch_net_G": [round(v, 3) for v in level_net],
             "basis_rank": basis.rank, "basis_error": basis.error}
     return PatchLibrary(patches=patches, uniform=uniform, theta=theta, level_net=net,
