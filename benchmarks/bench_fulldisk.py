@@ -69,8 +69,8 @@ def main():
     inst = gongsynth.GONGInstrument()
     grid = inst.detector_shape * inst.supersampling
     on_disk = int(disk_geometry((grid, grid), inst.plate_scale / inst.supersampling).on_disk.sum())
-    print(f"gongsynth {gongsynth.__version__}: full disk, {grid}² samples, {on_disk / 1e6:.2f} M on the disk; "
-          f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
+    print(f"gongsynth {gongsynth.__version__}: full disk, {grid}² samples, {on_disk / 1e6:.2f} M on the "
+          f"disk; load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
 
     # -- the library: build (cold), save and load (the cache), render
     library, wall, cpu = timed(build_library, seed=LIBRARY_SEED, instrument=inst)
@@ -103,7 +103,8 @@ def main():
     print(f"per-sample synthesis {wall_old:6.2f} s wall {cpu_old:6.2f} s cpu   {what}")
     print(f"scene speed-up: {wall_old / wall_new:.1f}x wall, {cpu_old / cpu_new:.1f}x cpu "
           f"(library render against per-sample synthesis, same grid and process)")
-    print(f"peak memory of this process (both paths) {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MB")
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print(f"peak memory of this process (both paths) {peak:.0f} MB")
 
     if args.runs:
         with tempfile.TemporaryDirectory() as cache:
