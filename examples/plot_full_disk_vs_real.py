@@ -1,7 +1,7 @@
 """
-=========================================================
+===========================================================
 A simulated full disk beside real GONG and MDI magnetograms
-=========================================================
+===========================================================
 
 The full-disk mode fills the Sun's large-scale field with small scales from
 a library of built-in photosphere patches (quiet Sun, enhanced network,

@@ -112,42 +112,43 @@ def render_disk(light, truth, h, distance, b0, radius,
 
     Parameters
     ----------
-    light : float32 (6, NY, NX), truth : float32 (NY, NX)
-        Outputs (zero beyond the limb), written in place.
+    light, truth : `numpy.ndarray`
+        float32 (6, NY, NX) and (NY, NX) outputs (zero beyond the limb), written in place.
     h : float
         Grid spacing (rad).
     distance, b0, radius : float
         Observer distance (km), B0 (rad), solar radius (km).
-    field, velocity : float64 (nlat, nlon)
-        Large-scale radial field (G) and line-of-sight velocity (m/s).
+    field, velocity : `numpy.ndarray`
+        float64 (nlat, nlon): large-scale radial field (G) and line-of-sight velocity (m/s).
     grid_lon0, grid_lat0, grid_step : float
         Their first longitude and latitude and spacing (deg).
     cell_km : float
         Cell side.
-    cells : float64 (nj, ni, 4)
-        `cell_table`: each cell's centre and turn.
+    cells : `numpy.ndarray`
+        float64 (nj, ni, 4), `cell_table`: each cell's centre and turn.
     cell_j0, cell_i0 : int
         Its origin.
-    seed : uint64
+    seed : `numpy.uint64`
         The run's scene seed.
-    theta : float64 (T,)
-        The library's viewing angles (rad).
-    ld_coeff : float64
-        Limb-darkening polynomial coefficients.
-    level_net : float64 (L,)
-        Net flux density of each level (G), increasing.
-    level_first, level_count, level_uniform : int64 (L,)
-        First patch and number of patches of each level; its uniform index (-1: a patch level).
-    patches : float32 (P, ny, nx, T, K), uniform : float32 (U, T, K)
-        The library rows.
+    theta : `numpy.ndarray`
+        The library's viewing angles (rad), float64.
+    ld_coeff : `numpy.ndarray`
+        Limb-darkening polynomial coefficients, float64.
+    level_net : `numpy.ndarray`
+        Net flux density of each level (G), increasing, float64.
+    level_first, level_count, level_uniform : `numpy.ndarray`
+        int64, per level: first patch and number of patches; its uniform index (-1: a patch level).
+    patches, uniform : `numpy.ndarray`
+        The library rows: float32 (patch, y, x, angle, row) and (uniform level, angle, row).
     pixel_km : float
         Patch column size.
     mirror_ok : bool
     n_e : int
-    e_index : int64 (2,), v_sign : float64 (2,)
-        Analyser layout (`gongsynth.stages.scene.library.PatchLibrary`).
-    amplitudes : float64 (nv, 3, J), totals : float64 (nv, 3)
-        The Doppler basis tables, at velocities ``v_first + k v_step``.
+    e_index, v_sign : `numpy.ndarray`
+        Analyser layout (`gongsynth.stages.scene.library.PatchLibrary`), int64 and float64 (2,).
+    amplitudes, totals : `numpy.ndarray`
+        The Doppler basis tables, float64 (velocity, 3, J) and (velocity, 3), at velocities
+        ``v_first + k v_step``.
     v_first, v_step : float
     to_earth : float
         Radiance at the Sun to radiance at Earth per arcsec².
