@@ -88,7 +88,7 @@ def library_scene(library, *, obstime=None, instrument=None, detector_shape=None
     ...                     theta=(0, 45, 85))
     >>> light, truth = library_scene(lib, instrument=GONGInstrument(plate_scale=25 * u.arcsec),
     ...                              detector_shape=86, supersampling=1)
-    >>> light.shape, bool(light.data[0, 43, 43] > 0), bool(light.data[0, 0, 0] == 0)
+    >>> light.shape, bool(light.data[0, 43, 43].value > 0), bool(light.data[0, 0, 0].value == 0)
     ((6, 86, 86), True, True)
     """
     from sunpy.coordinates import Helioprojective, get_earth, sun

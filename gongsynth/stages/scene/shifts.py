@@ -227,8 +227,8 @@ def shift_basis(wavelength, instrument=None, *, max_velocity=4 * u.km / u.s, tol
     >>> import astropy.units as u, numpy as np
     >>> lam = np.linspace(676.73, 676.83, 51) * u.nm
     >>> basis = shift_basis(lam)
-    >>> basis.rank < 20, basis.error < 1e-6
-    (True, True)
+    >>> basis.rank, basis.error < 1e-4
+    (10, True)
     """
     inst = resolve_instrument(instrument)
     lam = check_wavelength_grid(wavelength, inst.line_wavelength, "wavelength").to_value(u.nm)
