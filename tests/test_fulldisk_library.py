@@ -322,3 +322,37 @@ def test_bad_arguments(small_library):
         build_library(theta=(10, 20))
     with pytest.raises(ValueError, match="PatchLibrary"):
         full_disk_scene(model_photosphere(shape=(16, 16), pixel_size=6 * u.Mm), surface_field=constant_map(1))
+
+
+def test_a_full_disk_run_follows_the_synthetic_sun_of_its_date():
+    """The chain: surface_field = 'synthetic' at the run's date, a GONG site; the config repeats the run."""
+    import gongsynth
+    from gongsynth.config import SimulationConfig
+    from gongsynth.seeding import child_sequence
+    from gongsynth.sun.surface_field import surface_field_at, synthetic_surface_field
+
+    # 10″ pixels of 5 × 5 samples: point sampling of the 384 km patch columns averages out.
+    coarse = GONGInstrument(plate_scale=10 * u.arcsec, detector_shape=200, supersampling=5)
+    config = SimulationConfig(mode="full-disk", instrument=coarse, seed=4, duration=1 * u.min,
+                              obstime="2014-04-01T18:00:00", surface_field="synthetic", site="BB")
+    assert SimulationConfig.from_toml(config.to_toml()) == config
+    result = gongsynth.simulate(config=config, progress=False)
+    # B_r μ of the synthetic Sun averaged over each pixel (at the scene's samples) ...
+    fine = disk_geometry((1000, 1000), coarse.plate_scale / 5, obstime=config.obstime)
+    field = synthetic_surface_field(config.obstime, seed=child_sequence(4, "surface-field"))
+    b_r = surface_field_at(field, fine.longitude * u.deg, fine.latitude * u.deg, config.obstime).to_value(u.G)
+    expected = np.where(fine.on_disk, np.nan_to_num(b_r) * fine.mu, 0)
+    expected = expected.reshape(200, 5, 200, 5).mean(axis=(1, 3))
+    g = disk_geometry((200, 200), coarse.plate_scale, obstime=config.obstime)
+    use = g.on_disk & (g.mu > 0.3) & np.isfinite(result.truth.data)
+    # ... is what the true B_LOS follows, with the small scales' own mixed flux on top: slope 1, to
+    # within the scatter of the residual (pixels in one 30 Mm cell, ~4 × 4, are not independent).
+    truth, want = result.truth.data[use], expected[use]
+    slope, offset = np.polyfit(want, truth, 1)
+    residual = truth - (slope * want + offset)
+    sigma = residual.std() / (want.std() * np.sqrt(use.sum() / 16))
+    assert abs(slope - 1) < 5 * sigma and abs(offset) < 1.0
+    again = gongsynth.simulate(config=result.config, progress=False)
+    assert np.array_equal(again.magnetogram.data, result.magnetogram.data, equal_nan=True)
+    with pytest.raises(ValueError, match="surface_field"):
+        SimulationConfig(mode="tiled", surface_field="synthetic")
