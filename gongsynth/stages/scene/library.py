@@ -370,7 +370,17 @@ def cache_directory():
     return Path(value)
 
 
+#: What of the instrument the stored numbers depend on (the filters and the line): a run at another
+#: plate scale, seeing or camera shares the library.
+_INSTRUMENT_KEYS = ("line_wavelength", "lande_g", "prefilter_center", "prefilter_fwhm", "prefilter_form",
+                    "lyot_delta_h", "lyot_angle_1", "lyot_angle_2", "lyot_angle_3", "michelson_fsr",
+                    "michelson_angle", "waveplate_step", "integration_half_width", "quadrature_step")
+
+
 def _key(arguments):
+    arguments = dict(arguments)
+    inst = resolve_instrument(arguments.pop("instrument", None))
+    arguments["instrument"] = {name: getattr(inst, name) for name in _INSTRUMENT_KEYS}
     root = Path(__file__).resolve().parents[2]
     digest = hashlib.sha256()
     for name in _SOURCES:
