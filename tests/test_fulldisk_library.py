@@ -352,6 +352,11 @@ def test_a_full_disk_run_follows_the_synthetic_sun_of_its_date():
     residual = truth - (slope * want + offset)
     sigma = residual.std() / (want.std() * np.sqrt(use.sum() / 16))
     assert abs(slope - 1) < 5 * sigma and abs(offset) < 1.0
+    # The truth maps: the detector's resolution, blanked exactly where the measured maps are.
+    blank = np.isnan(result.magnetogram.data)
+    for truth_map in (result.truth, result.truth_psf):
+        assert truth_map.data.shape == blank.shape and np.array_equal(np.isnan(truth_map.data), blank)
+    assert np.array_equal(np.isnan(result.doppler.data), blank) and 0 < blank.mean() < 1
     again = gongsynth.simulate(config=result.config, progress=False)
     assert np.array_equal(again.magnetogram.data, result.magnetogram.data, equal_nan=True)
     with pytest.raises(ValueError, match="surface_field"):
