@@ -68,7 +68,7 @@ def estimate_memory(config):
     --------
     >>> from gongsynth.config import SimulationConfig
     >>> print(f"{estimate_memory(SimulationConfig(seed=0)).to(u.GB):.2f}")
-    1.87 Gbyte
+    1.75 Gbyte
     """
     inst = config.instrument
     columns = config.photosphere_shape[0] * config.photosphere_shape[1]
