@@ -322,6 +322,8 @@ def test_bad_arguments(small_library):
         build_library(theta=(10, 20))
     with pytest.raises(ValueError, match="PatchLibrary"):
         full_disk_scene(model_photosphere(shape=(16, 16), pixel_size=6 * u.Mm), surface_field=constant_map(1))
+    with pytest.raises(ValueError, match="build_library"):
+        full_disk_scene(small_library, mueller=np.eye(4), detector_shape=8)
 
 
 def test_a_full_disk_run_follows_the_synthetic_sun_of_its_date():

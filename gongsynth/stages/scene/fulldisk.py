@@ -195,6 +195,9 @@ def full_disk_scene(source, *, obstime=None, instrument=None, detector_shape=Non
     """
     inst = resolve_instrument(instrument)
     if isinstance(source, PatchLibrary):
+        if wavelength is not None or mueller is not None:
+            raise ValueError("a PatchLibrary holds its spectral grid and Mueller matrix: give them to "
+                             "build_library, not to full_disk_scene")
         return library_scene(source, obstime=obstime, instrument=inst, detector_shape=detector_shape,
                              supersampling=supersampling, surface_field=surface_field, seed=seed, site=site,
                              velocities=velocities, cell_size=cell_size)
