@@ -363,3 +363,31 @@ def test_a_full_disk_run_follows_the_synthetic_sun_of_its_date():
     assert np.array_equal(again.magnetogram.data, result.magnetogram.data, equal_nan=True)
     with pytest.raises(ValueError, match="surface_field"):
         SimulationConfig(mode="tiled", surface_field="synthetic")
+
+
+def test_a_mueller_matrix_with_cross_talk():
+    """
+    Q and U leaking into the analyser: both states keep their own polarisation-independent part.
+
+    (Q and U are those of the patch frame, observer toward +x: `build_library` says so.)
+    """
+    mueller = np.eye(4)
+    mueller[0, 1], mueller[3, 2], mueller[3, 1] = 0.02, 0.05, -0.03
+    lib = build_library(shape=(16, 16), pixel_size=6 * u.Mm, seeds_per_level=(1, 1, 1, 1), mueller=mueller)
+    assert lib.n_e == 2 and not lib.mirror_ok
+    light, _ = library_scene(lib, instrument=WHOLE, detector_shape=100, supersampling=1, obstime=DATE,
+                             surface_field=constant_map(3000.0), velocities=False)
+    g = disk_geometry((100, 100), WHOLE.plate_scale, obstime=DATE)
+    theta = np.radians(DEFAULT_THETA)
+    for iy, ix in ((50, 80), (20, 45), (70, 30)):
+        mu, azimuth = g.mu[iy, ix], g.los_azimuth[iy, ix]
+        k = np.searchsorted(theta, np.arccos(mu)) - 1
+        w = (np.arccos(mu) - theta[k]) / (theta[k + 1] - theta[k])
+        # The library's columns are seen with the observer toward +x (azimuth 0): at the angles around
+        # the sample's, with the analyser's cross-talk, interpolated as the scene does.
+        ends = [radiance_at_earth(channel_images(synthesize(uniform_column(3000.0, 0.25), mu=np.cos(t),
+                                                            los_azimuth=0 * u.deg),
+                                                 mueller=mueller, instrument=WHOLE))[:, 0, 0].value
+                / lib.line.limb_darkening_factor(np.cos(t)) for t in theta[k:k + 2]]
+        want = ((1 - w) * ends[0] + w * ends[1]) * lib.line.limb_darkening_factor(mu)
+        assert np.allclose(light.data[:, iy, ix].value, want, rtol=2e-5), azimuth

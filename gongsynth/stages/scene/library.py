@@ -253,7 +253,12 @@ def build_library(*, seed=0, shape=(256, 256), pixel_size=384 * u.km, seeds_per_
     wavelength : `~astropy.units.Quantity`, optional
         Spectral grid (default: the paper's 51 points).
     mueller : array_like, optional
-        A (4, 4) instrument Mueller matrix (default: identity).
+        A (4, 4) instrument Mueller matrix (default: identity).  Q and U are
+        those of the patch's frame (the observer toward +x), i.e. referred to
+        the direction of disk centre on the sky rather than to solar west: a
+        matrix that mixes Q or U into the analyser states sees them turned by
+        the sample's position angle (I and V, all the identity uses, are not
+        affected).
     instrument : `~gongsynth.GONGInstrument`, optional
     line : `~gongsynth.sun.photosphere.NiLine`, optional
     max_velocity : `~astropy.units.Quantity`, optional
