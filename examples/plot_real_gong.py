@@ -10,8 +10,9 @@ places it on the Sun from its RADIUS, limb fit and disk-centre keywords), next
 to a simulated 10-minute GONG magnetogram of gongsynth's built-in Sun at disk
 centre, both measured the same way by `gongsynth.compare`.
 
-The two Suns differ on purpose: the simulated field holds a sunspot and
-plage, the real one is the quiet Sun of a solar minimum.  What should agree is
+The two Suns differ on purpose: the simulated field (gongsynth's default 3-D
+Sun, a 98 Mm box repeated over the field) holds a sunspot and network, the
+real one is the quiet Sun of a solar minimum.  What should agree is
 what the instrument adds: the noise in the quietest 60″ box near disk centre
 (the real map's is 4.0 G in ``PROVENANCE.md``), and the pixel-to-pixel
 noise.  That noise follows the number of photons, so the last section sets the

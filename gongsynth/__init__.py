@@ -7,22 +7,18 @@ Ni I 676.8 nm line to GONG Doppler and line-of-sight magnetograms as sunpy Maps.
 The package's folders follow the data flow: `gongsynth.sun` (the input
 spectra), `gongsynth.stages` (the instrument), `gongsynth.products` (Maps and
 files) and `gongsynth.analysis` (real data, comparison, calibration).
+
+Most names below are imported when first used (``gongsynth.simulate``
+imports the pipeline, ``gongsynth.compare`` the comparison tools), so that a
+run does not pay for the analysis tools; the map source is registered with
+`sunpy.map.Map` at once.
 """
+import importlib
+import importlib.abc
+import importlib.util
 import sys
 
-from gongsynth.analysis import calibration, compare
-from gongsynth.analysis.apply_calibration import calibrate
-from gongsynth.analysis.observations import load_observation
-from gongsynth.analysis.weak_flux import weak_flux_factor
-from gongsynth.instrument import GONGInstrument
-from gongsynth.pipeline import SimulationResult, simulate, simulate_many
 from gongsynth.products.maps import GONGSynthMap  # registers the map source with sunpy.map.Map
-from gongsynth.stages import filters, reduction
-from gongsynth.sun import photosphere, rt
-from gongsynth.sun.atmosphere import Atmosphere
-from gongsynth.sun.model_atmosphere import model_atmosphere
-from gongsynth.sun.stokes import StokesCube
-from gongsynth.sun.surface_field import surface_field_from_map, synthetic_surface_field
 from gongsynth.version import version as __version__
 
 __citation__ = (
@@ -30,12 +26,75 @@ __citation__ = (
     "Simulation I, and the gongsynth software (version " + __version__ + "); see CITATION.cff"
 )
 
+# Public name -> (module, attribute or None for the module itself).
+_LAZY = {
+    "Atmosphere": ("gongsynth.sun.atmosphere", "Atmosphere"),
+    "GONGInstrument": ("gongsynth.instrument", "GONGInstrument"),
+    "SimulationResult": ("gongsynth.pipeline", "SimulationResult"),
+    "StokesCube": ("gongsynth.sun.stokes", "StokesCube"),
+    "calibrate": ("gongsynth.analysis.apply_calibration", "calibrate"),
+    "load_observation": ("gongsynth.analysis.observations", "load_observation"),
+    "model_atmosphere": ("gongsynth.sun.model_atmosphere", "model_atmosphere"),
+    "simulate": ("gongsynth.pipeline", "simulate"),
+    "simulate_many": ("gongsynth.pipeline", "simulate_many"),
+    "surface_field_from_map": ("gongsynth.sun.surface_field", "surface_field_from_map"),
+    "synthetic_surface_field": ("gongsynth.sun.surface_field", "synthetic_surface_field"),
+    "weak_flux_factor": ("gongsynth.analysis.weak_flux", "weak_flux_factor"),
+}
+
 # The dotted paths promised to users (DESIGN §2) name the modules in their new
 # folders: ``import gongsynth.filters`` gives `gongsynth.stages.filters` itself.
-for _name, _module in {"filters": filters, "reduction": reduction, "compare": compare,
-                       "calibration": calibration, "photosphere": photosphere, "rt": rt}.items():
-    sys.modules[f"{__name__}.{_name}"] = _module
-del _name, _module
+_ALIASES = {
+    "filters": "gongsynth.stages.filters",
+    "reduction": "gongsynth.stages.reduction",
+    "compare": "gongsynth.analysis.compare",
+    "calibration": "gongsynth.analysis.calibration",
+    "photosphere": "gongsynth.sun.photosphere",
+    "rt": "gongsynth.sun.rt",
+}
+
+
+class _AliasLoader(importlib.abc.Loader):
+    """Loads ``gongsynth.<alias>`` as the module it names (the same module object)."""
+
+    def __init__(self, target):
+        self.target = target
+
+    def create_module(self, spec):
+        return importlib.import_module(self.target)
+
+    def exec_module(self, module):
+        pass
+
+
+class _AliasFinder(importlib.abc.MetaPathFinder):
+    """Finds the aliased dotted paths (``import gongsynth.filters``)."""
+
+    def find_spec(self, fullname, path, target=None):
+        prefix, _, name = fullname.partition(".")
+        if prefix != __name__ or name not in _ALIASES:
+            return None
+        return importlib.util.spec_from_loader(fullname, _AliasLoader(_ALIASES[name]))
+
+
+if not any(isinstance(finder, _AliasFinder) for finder in sys.meta_path):
+    sys.meta_path.append(_AliasFinder())
+
+
+def __getattr__(name):
+    if name in _ALIASES:
+        return importlib.import_module(f"{__name__}.{name}")
+    if name in _LAZY:
+        module, attribute = _LAZY[name]
+        value = getattr(importlib.import_module(module), attribute)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY) | set(_ALIASES))
+
 
 __all__ = ["Atmosphere", "GONGInstrument", "GONGSynthMap", "SimulationResult", "StokesCube", "calibrate",
            "calibration", "compare", "filters", "load_observation", "model_atmosphere",

@@ -67,8 +67,10 @@ def estimate_memory(config):
     Examples
     --------
     >>> from gongsynth.config import SimulationConfig
-    >>> print(f"{estimate_memory(SimulationConfig(seed=0)).to(u.GB):.2f}")
+    >>> print(f"{estimate_memory(SimulationConfig(seed=0)).to(u.GB):.2f}")      # the 3-D Sun
     1.75 Gbyte
+    >>> print(f"{estimate_memory(SimulationConfig(seed=0, sun='milne-eddington')).to(u.GB):.2f}")
+    1.87 Gbyte
     """
     inst = config.instrument
     columns = config.photosphere_shape[0] * config.photosphere_shape[1]
@@ -77,6 +79,10 @@ def estimate_memory(config):
         # The patch library (`gongsynth.stages.scene.library`): 256² columns per patch, held whole.
         columns, library = 256 * 256, 350e6
     model = 450 * columns  # the photosphere model's temporaries
+    if config.sun == "model-atmosphere" and config.atmosphere_file is None:
+        # The 3-D atmosphere (9 float32 fields on 80 heights) and its synthesised Stokes cube
+        # (4 x 51 float32), both held until the channels are made.
+        model = (9 * 80 + 4 * 51) * 4 * columns + model
     side = config.detector_pixels * inst.supersampling
     grid = side ** 2
     reach = 2 * math.ceil((inst.psf_radius / inst.plate_scale).to_value(u.one) * inst.supersampling)

@@ -95,7 +95,15 @@ def factors(label, latitude, results, args, seconds, baseline=None):
 
 def summarise(paths, out):
     """One QTable of the recorded factors (ECSV, with provenance), for the docs and the gallery."""
-    records = [json.loads(line) for path in paths for line in Path(path).read_text().splitlines() if line]
+    records, seen = [], set()
+    for line in (line for path in paths for line in Path(path).read_text().splitlines() if line):
+        record = json.loads(line)
+        # An ablation sweep repeats its baseline: keep one row of each set of runs.
+        key = (record["label"], record["latitude"], tuple(record["shape"]), record["pixel_km"],
+               tuple(record["per_seed"]), record.get("change"))
+        if key not in seen:
+            seen.add(key)
+            records.append(record)
     table = QTable()
     table["label"] = [r["label"] for r in records]
     table["sun"] = [r["sun"] for r in records]
@@ -114,8 +122,10 @@ def summarise(paths, out):
                        "uncertainty = standard error over seeds, pooled = one fit to all seeds' pixels, "
                        "change = paired change from the baseline run of the same seeds (ablations).",
         "script": "scripts/weak_flux_factors.py",
-        "git_commit": subprocess.run(["git", "describe", "--always", "--dirty"], capture_output=True,
-                                     text=True, cwd=Path(__file__).parent).stdout.strip(),
+        "run_versions": sorted({r.get("version", "?") for r in records}),
+        "summarised_at_commit": subprocess.run(["git", "describe", "--always", "--dirty"],
+                                               capture_output=True, text=True,
+                                               cwd=Path(__file__).parent).stdout.strip(),
         "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
     })
     table.write(out, format="ascii.ecsv", overwrite=True)

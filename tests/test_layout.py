@@ -33,7 +33,7 @@ LAYERS = (
     ("gongsynth.stages", "gongsynth.stages.filters"),
     ("gongsynth.stages.channels",),
     ("gongsynth.stages.scene",),
-    ("gongsynth.stages.optics", "gongsynth.stages.psf"),
+    ("gongsynth.stages.optics", "gongsynth.stages.psf", "gongsynth.stages.imagers"),
     ("gongsynth.stages.camera",),
     ("gongsynth.stages.reduction",),
     ("gongsynth.products",),

@@ -247,3 +247,23 @@ def test_model_bad_input():
         model_photosphere(shape=(32, 32), pixel_size=3072 * u.km, umbra_radius=20 * u.Mm)
     with pytest.raises(ValueError, match="granulation_contrast"):
         model_photosphere(shape=(32, 32), pixel_size=3072 * u.km, granulation_contrast=-0.1)
+
+
+@pytest.mark.parametrize("shape, spacing, dx", [((300, 200), 700.0, 50.0), ((128, 96), 25000.0, 768.0),
+                                               ((64, 64), 1000.0, 400.0)])
+def test_bucket_search_finds_the_same_two_nearest_seeds_as_a_kd_tree(shape, spacing, dx):
+    """The nearest and second-nearest cell centres: the same answer as a periodic k-d tree."""
+    from scipy.spatial import cKDTree
+
+    from gongsynth.sun.photosphere.voronoi import nearest_two
+
+    rng = np.random.default_rng(7)
+    ny, nx = shape
+    box = (nx * dx, ny * dx)
+    n = max(3, int(rng.poisson(box[0] * box[1] / spacing**2)))
+    seeds = np.column_stack([rng.uniform(0, box[0], n), rng.uniform(0, box[1], n)])
+    y, x = np.meshgrid((np.arange(ny) + 0.5) * dx, (np.arange(nx) + 0.5) * dx, indexing="ij")
+    want_d, want_i = cKDTree(seeds, boxsize=list(box)).query(np.column_stack([x.ravel(), y.ravel()]), k=2)
+    got_d, got_i = nearest_two(seeds, shape, dx, box)
+    assert np.array_equal(got_i, want_i)
+    assert np.allclose(got_d, want_d, rtol=1e-14, atol=0)

@@ -16,7 +16,7 @@ from gongsynth.stages.filters import channel_responses, channel_weights
 from gongsynth.stages.optics import observe
 from gongsynth.stages.scene.scene import radiance_at_earth
 from gongsynth.stages.scene.tiled import tile, tiled_scenes
-from gongsynth.sun.photosphere import Photosphere, synthesize
+from gongsynth.sun.photosphere import DeferredStokes, Photosphere, synthesize
 from gongsynth.sun.stokes import RADIANCE_UNIT, StokesCube
 
 LAM = np.linspace(676.73, 676.83, 51) * u.nm
@@ -140,6 +140,66 @@ def test_filter_first_equals_the_papers_literal_order():
             literal[3 * p:3 * p + 3] += weights[:, j, None, None] * seen[p]
     fast = fast.to_value(u.erg / (u.s * u.cm**2 * u.arcsec**2))
     assert np.max(np.abs(fast - literal)) < 1e-12 * np.max(np.abs(literal))
+
+
+def _mueller(kind, shape):
+    """A non-trivial Mueller matrix of each kind (global, per wavelength, per pixel)."""
+    m = np.eye(4)
+    m[0, 3], m[3, 1], m[3, 2] = 0.002, 0.01, -0.004
+    if kind == "global":
+        return m
+    if kind == "spectral":
+        out = np.broadcast_to(m, (LAM.size, 4, 4)).copy()
+        out[:, 3, 2] = np.linspace(-0.01, 0.01, LAM.size)
+        return out
+    out = np.broadcast_to(m, shape + (4, 4)).copy()
+    out[..., 3, 1] = np.linspace(0, 0.02, shape[0] * shape[1]).reshape(shape)
+    return out
+
+
+@pytest.mark.parametrize("kind", [None, "global", "spectral", "spatial"])
+def test_deferred_synthesis_gives_the_whole_cubes_channel_images(kind):
+    """
+    Synthesis contracted with the channel weights column by column (never stored)
+    equals the channel images of the stored float32 cube to that cube's rounding:
+    |difference| <= 2^-24 Σ_j |W_cj| Σ_s |c_ps| |S_s(λ_j)| (+ float64 round-off).
+    """
+    shape = (24, 20)
+    photosphere = random_photosphere(shape, seed=31)
+    mueller = None if kind is None else _mueller(kind, shape)
+    geometry = dict(mu=0.7, los_azimuth=-60 * u.deg)
+    deferred = DeferredStokes(photosphere, **geometry)
+    got = channel_images(deferred, mueller=mueller).value
+    cube = synthesize(photosphere, **geometry)
+    want = channel_images(cube, mueller=mueller).value
+    assert deferred._cube is None  # the cube was never made
+    stokes = np.abs(np.stack([getattr(cube, n).value for n in "IQUV"]).astype(np.float64))  # (4, ny, nx, nλ)
+    coeff = np.abs(analyser_coefficients(mueller if mueller is not None else np.eye(4)))
+    if coeff.ndim == 2:
+        coeff = np.broadcast_to(coeff, (LAM.size,) + coeff.shape)
+    w = np.abs(channel_weights(LAM).to_value(u.cm))
+    if kind == "spatial":
+        bound = np.einsum("yxps,syxl,cl->pcyx", coeff, stokes, w)
+    else:
+        bound = np.einsum("lps,syxl,cl->pcyx", coeff, stokes, w)
+    bound = bound.reshape(want.shape) * 2.0**-24 + 1e-12 * np.abs(want).max()
+    assert np.all(np.abs(got - want) <= bound)
+    assert np.array_equal(deferred.blos, cube.blos)
+
+
+def test_contraction_kernel_is_independent_of_threads():
+    import numba
+
+    photosphere = random_photosphere((40, 33), seed=32)
+    results = []
+    previous = numba.get_num_threads()
+    try:
+        for threads in (1, numba.config.NUMBA_NUM_THREADS):
+            numba.set_num_threads(threads)
+            results.append(channel_images(DeferredStokes(photosphere, mu=0.8)).value)
+    finally:
+        numba.set_num_threads(previous)
+    assert np.array_equal(results[0], results[1])
 
 
 @pytest.mark.parametrize("mueller, error, match", [

@@ -286,3 +286,24 @@ def test_other_bad_input():
 def test_module_exports():
     for name in scene_mod.__all__:
         assert hasattr(scene_mod, name)
+
+
+def test_deferred_scene_rows_are_the_whole_scene_bit_for_bit():
+    """A tiled scene made a block of rows at a time (one thread) equals the whole one (threads), exactly."""
+    from gongsynth.stages.scene.scene import DeferredStack
+
+    rng = np.random.default_rng(8)
+    planes = rng.uniform(1e6, 2e6, (6, 40, 48)) * u.Unit("erg / (s cm2 sr)")
+    light, truth = tiled_scenes(planes, rng.normal(0, 100, (40, 48)) * u.G, 300 * u.km, detector_shape=64,
+                                pointing=Pointing(30 * u.deg))
+    assert isinstance(light.planes, DeferredStack) and isinstance(truth.planes, DeferredStack)
+    assert light.shape == (6, 320, 320) and light.planes.unit == EARTH_RADIANCE_UNIT
+    blocks = [np.concatenate([light.planes[i][r:r + 37] for r in range(0, 320, 37)]) for i in range(6)]
+    eager = tile(radiance_at_earth(planes), 300 * u.km, detector_shape=64, pointing=Pointing(30 * u.deg),
+                 dtype=np.float32)
+    assert np.array_equal(np.stack(blocks), eager.value)
+    with pytest.raises(TypeError, match="row slices"):
+        light.planes[0][::2]
+    assert np.array_equal(light.data.value, eager.value)  # made whole on first access, then kept
+    assert light.data is light.data
+    assert np.array_equal(light.blos, truth.data)

@@ -2,10 +2,13 @@
 The physics of GONG's weak-flux factor in the built-in 3-D Sun (issue 14).
 
 Whole runs of the default Sun (the 98 Mm box of 256² columns of 384 km, with
-its sunspot, through the LTE radiative transfer), on a 256-pixel detector at
-GONG's resolution only, 10 minutes as in the papers.  Uncertainties are the
-estimator's block bootstrap: of each factor for two latitudes (independent
-runs), of the paired change for two runs of the same seed.
+its sunspot, through the LTE radiative transfer), on a 430-pixel detector at
+GONG's resolution only (as many pixels as the default run's 1× quadrant), 10
+minutes as in the papers.  Uncertainties are the estimator's block bootstrap:
+of each factor for two latitudes (independent runs), of the paired change for
+two runs of the same seed.  Measured at 0° (seed 1; seed 2): 1.281 ± 0.004
+(1.200 ± 0.004); the kG elements at the quiet Sun's temperature change it by
+−0.0122 ± 0.0020 (−0.0069 ± 0.0016).
 """
 import math
 
@@ -15,7 +18,7 @@ import pytest
 import gongsynth
 from gongsynth.analysis.weak_flux import weak_flux_factor_difference
 
-RUN = dict(sun="model-atmosphere", detector_shape=256, resolutions=(1,), duration=10 * u.min, seed=1,
+RUN = dict(sun="model-atmosphere", detector_shape=430, resolutions=(1,), duration=10 * u.min, seed=1,
            progress=False)
 
 

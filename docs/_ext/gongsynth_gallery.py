@@ -20,6 +20,7 @@ ORDER = [
     "plot_full_disk_vs_real.py",
     "plot_compare_real.py",
     "plot_latitude_sweep.py",
+    "plot_why_gong_under_measures.py",
 ]
 
 

@@ -149,6 +149,25 @@ def _field_of_view(result):
     return f"full disk, {width.value:.0f}″ field of view"
 
 
+# Fixed layout in inches (a layout engine costs a second rendering of the WCS axes):
+# a cell per panel, and within it (left, bottom, width, height) of the map, its
+# colour bar (85 % of the map's height) and the histogram; the title's band on top.
+_CELL = (4.6, 4.0)
+_TITLE = 0.7
+_MAP = (0.85, 0.6, 2.85, 2.85)
+_BAR = (3.83, 0.6 + 0.075 * 2.85, 0.12, 0.85 * 2.85)
+_PLOT = (0.85, 0.6, 3.2, 2.85)
+
+
+def _rect(fig, index, ncols, nrows, box):
+    """Figure-fraction rectangle of ``box`` (inches in a cell) in cell ``index`` (row-major, top first)."""
+    width, height = fig.get_size_inches()
+    row, col = divmod(index, ncols)
+    left = col * _CELL[0] + box[0]
+    bottom = (nrows - 1 - row) * _CELL[1] + box[1]
+    return (left / width, bottom / height, box[2] / width, box[3] / height)
+
+
 def quicklook_figure(result):
     """
     A figure with every product map of a run, each with its colour bar.
@@ -177,11 +196,11 @@ def quicklook_figure(result):
     panels = _panels(result)
     ncols = 3
     nrows = int(np.ceil(len(panels) / ncols))
-    fig = Figure(figsize=(4.6 * ncols, 4.3 * nrows + 0.7), layout="constrained")
+    fig = Figure(figsize=(_CELL[0] * ncols, _CELL[1] * nrows + _TITLE))
     units = {"magnetogram": "B_LOS [G]", "Dopplergram": "v_LOS [m/s], + away",
              "pseudo-continuum": "[DN]"}
     for i, (title, smap, norm, extend) in enumerate(panels):
-        ax = fig.add_subplot(nrows, ncols, i + 1, projection=smap)
+        ax = fig.add_axes(_rect(fig, i, ncols, nrows, _MAP), projection=smap)
         image = smap.plot(axes=ax, title=title, norm=norm)
         ax.title.set_fontsize(10)
         for coord, name in zip(ax.coords, ("Solar X", "Solar Y")):
@@ -190,14 +209,14 @@ def quicklook_figure(result):
             coord.set_ticks(number=4)
         if any(smap is m for m in (result.magnetogram, result.truth, result.truth_psf)):
             _label_quadrants(ax, result.resolution_map)
-        bar = fig.colorbar(image, ax=ax, shrink=0.85, extend=extend)
+        bar = fig.colorbar(image, cax=fig.add_axes(_rect(fig, i, ncols, nrows, _BAR)), extend=extend)
         if title not in units or title == "magnetogram":
             bar.set_ticks(_field_ticks(norm.vmax))
             bar.set_ticklabels([f"{t:g}" for t in _field_ticks(norm.vmax)])
         bar.set_label(units.get(title, "B_LOS [G]"), fontsize=8)
         bar.ax.tick_params(labelsize=7)
     if len(panels) < nrows * ncols:
-        _histograms(fig.add_subplot(nrows, ncols, len(panels) + 1), result)
+        _histograms(fig.add_axes(_rect(fig, len(panels), ncols, nrows, _PLOT)), result)
     magnifications = np.unique(result.resolution_map)
     note = (f"; input magnified {', '.join(f'{m:g}×' for m in magnifications)} by quadrant (1× = GONG)"
             if magnifications.size > 1 else "")

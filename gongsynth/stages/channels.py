@@ -222,15 +222,26 @@ def channel_images(stokes, *, mueller=None, instrument=None):
 
 
 def _deferred_channel_images(stokes, mueller, inst):
-    """`channel_images` of a `DeferredStokes`, block by block of whole rows."""
+    """
+    `channel_images` of a `DeferredStokes`: the spectra contracted with the
+    channel weights column by column, never stored (`DeferredStokes.project`),
+    or block by block of whole rows for a per-pixel Mueller matrix.
+    """
     ny, nx, nl = stokes.shape
     m = None if mueller is None else _check_mueller(mueller)
     if m is not None and m.ndim == 3 and m.shape[0] != nl:
         raise ValueError(f"a per-wavelength mueller must have shape ({nl}, 4, 4), got {m.shape}")
     if m is not None and m.ndim == 4 and m.shape[:2] != (ny, nx):
         raise ValueError(f"a per-pixel mueller must have shape ({ny}, {nx}, 4, 4), got {m.shape}")
+    if m is None or m.ndim < 4:
+        weights = channel_weights(stokes.wavelength, inst).to_value(u.cm)  # (3, nλ)
+        coeff = analyser_coefficients(m)  # (2, 4) or (nλ, 2, 4)
+        if coeff.ndim == 2:
+            coeff = np.broadcast_to(coeff, (nl,) + coeff.shape)
+        # W'[p, c, s, λ] = coeff[λ, p, s] W[c, λ]: plane p × 3 + c of Stokes s at λ.
+        contraction = np.einsum("lps,cl->pcsl", coeff, weights).reshape(N_PLANES, 4, nl)
+        return u.Quantity(stokes.project(contraction, _BLOCK_SPECTRA), CHANNEL_UNIT, copy=False)
     out = np.empty((N_PLANES, ny, nx))
     for rows, cube in stokes.blocks(_BLOCK_SPECTRA):
-        block_mueller = m[rows] if m is not None and m.ndim == 4 else m
-        out[:, rows] = channel_images(cube, mueller=block_mueller, instrument=inst).value
+        out[:, rows] = channel_images(cube, mueller=m[rows], instrument=inst).value
     return u.Quantity(out, CHANNEL_UNIT, copy=False)

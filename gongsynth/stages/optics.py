@@ -23,8 +23,8 @@ import scipy.fft
 import scipy.sparse
 
 from gongsynth.instrument import resolve_instrument
+from gongsynth.stages.imagers import BandLimitedImager, ExactImager, image_planes, pixel_means
 from gongsynth.stages.psf import (
-    BandLimitedImager,
     fft_workers,
     normalize_kernel,
     psf_instrument,
@@ -32,7 +32,7 @@ from gongsynth.stages.psf import (
     psf_profile,
     wrapped_kernel,
 )
-from gongsynth.stages.scene.scene import BOUNDARIES
+from gongsynth.stages.scene.scene import BOUNDARIES, DeferredStack
 from gongsynth.validation import check_finite, check_quantity
 
 __all__ = [
@@ -294,8 +294,11 @@ def pixelize(stack, pixel_scale: u.arcsec, *, instrument=None, periodic=False, m
     return _with_unit(out.reshape(values.shape[:-2] + (ndy, ndx)), unit)
 
 
-def _exact_imager(shape, pixel_scale, inst, kernel, boundary, dtype, workers):
-    """`BandLimitedImager` when ``shape`` holds exactly supersampling² samples per detector pixel."""
+def _imager(shape, pixel_scale, inst, kernel, boundary, dtype, workers, band_limited=True):
+    """
+    The Fourier-space operator (`BandLimitedImager`, or `ExactImager` with every
+    alias) when ``shape`` holds exactly supersampling² samples per detector pixel, else None.
+    """
     if boundary not in BOUNDARIES:
         raise ValueError(f"boundary must be one of {BOUNDARIES}, got {boundary!r}")
     factor = inst.supersampling
@@ -303,13 +306,28 @@ def _exact_imager(shape, pixel_scale, inst, kernel, boundary, dtype, workers):
     plate = inst.plate_scale.to_value(u.arcsec)
     if not math.isclose(scale * factor, plate, rel_tol=1e-9) or shape[0] % factor or shape[1] % factor:
         return None
-    return BandLimitedImager(shape, normalize_kernel(kernel, "psf"), boundary, factor,
-                              np.float32 if dtype == np.float32 else np.float64, workers)
+    kind = BandLimitedImager if band_limited else ExactImager
+    return kind(shape, normalize_kernel(kernel, "psf"), boundary, factor,
+                np.float32 if dtype == np.float32 else np.float64, workers)
+
+
+def _band_limited(band_limited, psf, inst):
+    """
+    Whether the band-limited operator may be used: asked for, the instrument's
+    PSF (a user kernel is taken at its word: the exact operator), and the
+    aperture's cut-off at the detector's Nyquist frequency or below (0.5 %
+    above it is tolerated: GONG's D/λ0 = 0.2006 cycles per arcsec against
+    0.2, where the Airy OTF is ~1e-4).
+    """
+    if not band_limited or not (psf is None or psf is True):
+        return False
+    cutoff = (inst.aperture / inst.line_wavelength).to_value(u.one) * u.arcsec.to(u.rad)
+    return cutoff <= 1.005 / (2 * inst.plate_scale.to_value(u.arcsec))
 
 
 @u.quantity_input
 def observe(stack, pixel_scale: u.arcsec, *, instrument=None, psf=True, seeing=True, boundary="periodic",
-            method="bilinear", workers=None):
+            method="bilinear", workers=None, band_limited=True):
     """
     PSF (optional) then pixelization of any stack: light and ground truth alike.
 
@@ -336,6 +354,18 @@ def observe(stack, pixel_scale: u.arcsec, *, instrument=None, psf=True, seeing=T
         Resampling of `pixelize`.
     workers : int, optional
         Threads for the FFTs.
+    band_limited : bool
+        On a grid of exactly ``supersampling`` samples per detector pixel (every
+        gongsynth scene's), the PSF and the binning run in Fourier space.
+        ``True`` (default): with the instrument PSF, at the frequencies the
+        detector samples, which are all the aperture passes
+        (`~gongsynth.stages.imagers.BandLimitedImager`; the aliases it leaves
+        out are the kernel's leakage beyond them, < 2e-5 of the transfer
+        function); a user kernel, or an aperture whose cut-off lies above the
+        detector's Nyquist frequency, gets the exact operator.  ``False``:
+        always the exact one (`~gongsynth.stages.imagers.ExactImager`: the
+        same numbers as `convolve` then `pixelize`, to rounding).  Other grids
+        take the reference path (`convolve`, then `pixelize`).
 
     Returns
     -------
@@ -360,7 +390,8 @@ def observe(stack, pixel_scale: u.arcsec, *, instrument=None, psf=True, seeing=T
         return pixelize(stack, pixel_scale, instrument=inst, periodic=periodic, method=method)
     values, unit = _split_unit(stack, "stack")
     values = _check_stack(values, "stack")
-    imager = _exact_imager(values.shape[-2:], pixel_scale, inst, kernel, boundary, values.dtype, workers)
+    imager = _imager(values.shape[-2:], pixel_scale, inst, kernel, boundary, values.dtype, workers,
+                     _band_limited(band_limited, psf, inst))
     if imager is not None:
         planes = values.reshape((-1,) + values.shape[-2:])
         out = np.empty((planes.shape[0],) + imager.detector_shape)
@@ -404,7 +435,7 @@ def photometric_factor(instrument=None):
     return (factor.to(u.arcsec**2 * u.cm**2 * u.s / u.erg)) * u.electron
 
 
-def expected_counts(scene, instrument=None, *, psf=True, seeing=True, workers=None):
+def expected_counts(scene, instrument=None, *, psf=True, seeing=True, workers=None, band_limited=True):
     """
     Expected electrons per frame in each detector pixel for the six planes.
 
@@ -424,6 +455,8 @@ def expected_counts(scene, instrument=None, *, psf=True, seeing=True, workers=No
         As in `observe`: ``False`` for the diffraction-limited PSF.
     workers : int, optional
         Threads for the FFTs.
+    band_limited : bool
+        As in `observe`.
 
     Returns
     -------
@@ -444,7 +477,7 @@ def expected_counts(scene, instrument=None, *, psf=True, seeing=True, workers=No
     inst = resolve_instrument(instrument if instrument is not None else getattr(scene, "instrument", None))
     radiance = check_quantity(scene.data, u.erg / (u.s * u.cm**2 * u.arcsec**2), "scene.data")
     planes = observe(radiance, scene.pixel_scale, instrument=inst, psf=psf, seeing=seeing,
-                     boundary=scene.boundary, workers=workers)
+                     boundary=scene.boundary, workers=workers, band_limited=band_limited)
     return _counts(planes, inst, radiance.dtype)
 
 
@@ -460,36 +493,16 @@ def _counts(planes, inst, dtype):
     return counts
 
 
-def _image_planes(values, imager):
-    """
-    A stack (k, ny, nx) through ``imager``, plane by plane.
-
-    In float32 the planes' common part (their mean) and each plane's
-    difference from it are transformed separately: the round-off of the
-    common part is the same in every plane, so it cancels in the ratios the
-    reduction measures (phases, hence B and v), and that of the differences
-    is relative to the differences, which are small.
-    """
-    out = np.empty((values.shape[0],) + imager.detector_shape)
-    if imager.dtype != np.float32 or values.shape[0] < 2:
-        for i, plane in enumerate(values):
-            out[i] = imager(plane)
-        return out
-    common = values.mean(axis=0, dtype=np.float64).astype(np.float32)
-    base = imager(common)
-    for i, plane in enumerate(values):
-        out[i] = imager(plane - common)
-        out[i] += base
-    return out
-
-
-def image_scene(light, truth=None, instrument=None, *, psf=True, seeing=True, workers=None):
+def image_scene(light, truth=None, instrument=None, *, psf=True, seeing=True, workers=None,
+                band_limited=True):
     """
     Expected counts of a scene and its truth map without and with the PSF, in one pass.
 
     The same as `expected_counts` for ``light`` and `observe` (``psf=False``,
     then ``psf``) for ``truth``, but the PSF operator (its transfer function)
-    is built once and shared by the light planes and the truth.
+    is built once and shared by the light planes and the truth, and deferred
+    scenes (`~gongsynth.stages.scene.scene.DeferredStack`) are read a block of
+    rows at a time, never made whole.
 
     Parameters
     ----------
@@ -503,6 +516,9 @@ def image_scene(light, truth=None, instrument=None, *, psf=True, seeing=True, wo
         As in `observe`.
     workers : int, optional
         Threads for the FFTs (default: every core).
+    band_limited : bool
+        As in `observe`: the operator at the detector's frequencies (default),
+        or with every alias (the reference).
 
     Returns
     -------
@@ -512,26 +528,51 @@ def image_scene(light, truth=None, instrument=None, *, psf=True, seeing=True, wo
         The truth averaged over each detector pixel, without and with the PSF.
     """
     inst = resolve_instrument(instrument if instrument is not None else getattr(light, "instrument", None))
-    radiance = check_quantity(light.data, u.erg / (u.s * u.cm**2 * u.arcsec**2), "light.data")
-    kernel = _resolve_kernel(psf, seeing, light.pixel_scale.to_value(u.arcsec), inst)
-    values = _check_stack(radiance.value, "light.data")
-    imager = None if kernel is None else _exact_imager(values.shape[-2:], light.pixel_scale, inst, kernel,
-                                                       light.boundary, values.dtype, workers)
-    if imager is None:  # no PSF, or a grid that needs the reference resampling
-        counts = expected_counts(light, inst, psf=psf, seeing=seeing, workers=workers)
+    unit = u.erg / (u.s * u.cm**2 * u.arcsec**2)
+    values = getattr(light, "planes", None)
+    if isinstance(values, DeferredStack):  # made from checked (finite) input
+        radiance_unit = values.unit
+        if not u.Unit(radiance_unit).is_equivalent(unit):
+            raise u.UnitsError(f"light.data must be in {unit}, got {radiance_unit}")
     else:
-        planes = _image_planes(values, imager)
-        counts = _counts(u.Quantity(planes, radiance.unit, copy=False), inst, values.dtype)
+        radiance = check_quantity(light.data, unit, "light.data")
+        values, radiance_unit = _check_stack(radiance.value, "light.data"), radiance.unit
+    kernel = _resolve_kernel(psf, seeing, light.pixel_scale.to_value(u.arcsec), inst)
+    imager = None if kernel is None else _imager(values.shape[-2:], light.pixel_scale, inst, kernel,
+                                                 light.boundary, values.dtype, workers,
+                                                 _band_limited(band_limited, psf, inst))
+    if imager is None:  # no PSF, or a grid that needs the reference resampling
+        counts = expected_counts(light, inst, psf=psf, seeing=seeing, workers=workers,
+                                 band_limited=band_limited)
+    else:
+        planes = image_planes(values, imager)
+        counts = _counts(u.Quantity(planes, radiance_unit, copy=False), inst, values.dtype)
+    if isinstance(values, DeferredStack):
+        values.release()
     if truth is None:
         return counts, None, None
+    truth_shape = getattr(truth, "planes", truth.data).shape
+    truth_values = getattr(truth, "planes", None)
+    if not isinstance(truth_values, DeferredStack) or truth_values.ndim != 2:
+        truth_values = None
     periodic = truth.boundary == "periodic"
-    truth_map = pixelize(truth.data, truth.pixel_scale, instrument=inst, periodic=periodic)
+    factor = inst.supersampling
+    exact_grid = (truth_values is not None and imager is not None and truth_shape == values.shape[-2:]
+                  and truth.pixel_scale == light.pixel_scale)
+    if exact_grid:
+        truth_map = u.Quantity(pixel_means(truth_values.plane(), factor), truth_values.unit)
+    else:
+        truth_map = pixelize(truth.data, truth.pixel_scale, instrument=inst, periodic=periodic)
     if kernel is None:
         return counts, truth_map, truth_map.copy()
-    if imager is None or truth.data.shape != values.shape[-2:] or truth.boundary != light.boundary:
+    if imager is None or truth_shape != values.shape[-2:] or truth.boundary != light.boundary:
         truth_psf = observe(truth.data, truth.pixel_scale, instrument=inst, psf=psf, seeing=seeing,
-                            boundary=truth.boundary, workers=workers)
+                            boundary=truth.boundary, workers=workers, band_limited=band_limited)
+    elif exact_grid and isinstance(imager, BandLimitedImager):
+        truth_psf = u.Quantity(imager(truth_values.plane()), truth_values.unit)
     else:
         data, unit = _split_unit(truth.data, "truth.data")
         truth_psf = _with_unit(imager(_check_stack(data, "truth.data")), unit)
+    if truth_values is not None:
+        truth_values.release()
     return counts, truth_map, truth_psf

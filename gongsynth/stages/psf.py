@@ -31,15 +31,13 @@ import os
 
 import astropy.units as u
 import numpy as np
-import scipy.fft
 import scipy.interpolate
 import scipy.special
 
 from gongsynth.instrument import resolve_instrument
 from gongsynth.validation import check_finite
 
-__all__ = ["psf_profile", "psf_kernel", "normalize_kernel", "psf_instrument", "wrapped_kernel", "fft_workers",
-           "BandLimitedImager"]
+__all__ = ["psf_profile", "psf_kernel", "normalize_kernel", "psf_instrument", "wrapped_kernel", "fft_workers"]
 
 # Gauss-Legendre nodes of the Hankel transform over [0, ν_c]: the integrand
 # oscillates ν_c r ≈ 30 times at r = 150″; 768 nodes give < 1e-9 relative error.
@@ -325,132 +323,3 @@ def fft_workers(workers):
         except AttributeError:  # not on Linux
             return os.cpu_count() or 1
     return workers
-
-
-def _fast_multiple(n, factor):
-    """The smallest multiple of ``factor`` ≥ ``n`` whose FFT is fast (5-smooth)."""
-    m = -(-n // factor)
-    while scipy.fft.next_fast_len(factor * m, real=True) != factor * m:
-        m += 1
-    return factor * m
-
-
-def _reflect_into(buffer, plane, pads):
-    """Write ``plane`` into ``buffer`` at offset ``pads`` with mirrored ("symmetric") margins."""
-    ny, nx = plane.shape
-    (top, bottom), (left, right) = pads
-    rows = slice(top, top + ny)
-    buffer[rows, left:left + nx] = plane
-    if left:
-        buffer[rows, :left] = plane[:, left - 1::-1]
-    if right:
-        buffer[rows, left + nx:left + nx + right] = plane[:, :nx - right - 1:-1]
-    width = slice(0, left + nx + right)
-    if top:
-        buffer[:top, width] = buffer[2 * top - 1:top - 1:-1, width]
-    if bottom:
-        buffer[top + ny:top + ny + bottom, width] = buffer[top + ny - 1:top + ny - bottom - 1:-1, width]
-
-
-class BandLimitedImager:
-    """
-    PSF, binning and sampling at the detector pixels as one operator in Fourier space.
-
-    For a stack sampled at exactly ``factor`` × ``factor`` samples per detector
-    pixel, the paper's chain (convolution with the PSF kernel, bilinear
-    resampling, which is then the identity, and ``factor`` × ``factor``
-    binning) is linear and shift invariant up to the final sampling.  One
-    forward transform per plane is multiplied by the kernel's transfer
-    function and by the binning's (a box of ``factor`` samples along y,
-    shifted to the first detector row); the spectrum folded onto the detector
-    rows is their exact decimation (aliases included), so the inverse
-    transform runs on one row in ``factor``; the binning along x is a sum of
-    ``factor`` samples after it.  The result equals the reference
-    (`convolve` then `pixelize`) to rounding, at a fifth of the inverse
-    transforms and without the supersampled result.  Planes are transformed
-    in their own precision (float32 planes in float32).
-
-    Parameters
-    ----------
-    shape : (int, int)
-        Shape (ny, nx) of the planes, ``factor`` × the detector's.
-    kernel : `numpy.ndarray`
-        The PSF sampled on the planes' grid, unit sum, centre at ``(ky // 2, kx // 2)``.
-    boundary : {"periodic", "zero", "reflect"}
-        Edge handling, as in `gongsynth.stages.optics.convolve`.
-    factor : int
-        Samples per detector pixel along each axis.
-    dtype : dtype
-        float32 or float64: the precision of the transforms.
-    workers : int or None
-        Threads for the transforms (`fft_workers`).
-    """
-
-    def __init__(self, shape, kernel, boundary, factor, dtype, workers):
-        ny, nx = shape
-        ky, kx = kernel.shape
-        self.shape, self.factor = (ny, nx), factor
-        self.dtype = np.dtype(dtype)
-        self.workers = fft_workers(workers)
-        self.detector_shape = (ny // factor, nx // factor)
-        if boundary == "periodic":
-            self.pads = ((0, 0), (0, 0))
-            fshape = (ny, nx)
-        else:
-            self.pads = ((ky - 1 - ky // 2, ky // 2), (kx - 1 - kx // 2, kx // 2))
-            fshape = (_fast_multiple(ny + ky - 1, factor),
-                      scipy.fft.next_fast_len(nx + kx - 1, real=True))
-        self.boundary, self.fshape = boundary, fshape
-        spectrum = scipy.fft.rfft2(wrapped_kernel(kernel, fshape, np.float64), workers=self.workers)
-        # Box of `factor` rows starting at the detector row's first sample (padded row
-        # index top + factor * d), as a transfer function; the fold's 1/factor in it.
-        n = fshape[0]
-        k = scipy.fft.fftfreq(n, 1 / n)
-        top = self.pads[0][0]
-        box = np.exp(2j * np.pi * np.outer(k, top + np.arange(factor)) / n).sum(axis=1) / factor**3
-        spectrum *= box[:, None]
-        self.transfer = spectrum.astype(np.result_type(self.dtype, np.complex64))
-
-    def __call__(self, plane):
-        """
-        One plane through the operator.
-
-        Parameters
-        ----------
-        plane : `numpy.ndarray`
-            (ny, nx) samples.
-
-        Returns
-        -------
-        `numpy.ndarray`
-            (ny // factor, nx // factor) float64: the mean over each detector pixel.
-        """
-        ny, nx = self.shape
-        factor = self.factor
-        ndy, ndx = self.detector_shape
-        buffer = np.zeros(self.fshape, dtype=self.dtype)
-        (top, _), (left, _) = self.pads
-        # A constant passes unchanged (unit-sum kernel, periodic or mirrored edges): transform
-        # the plane less its mean, which makes float32 round-off relative to the contrast.
-        level = 0.0
-        if self.boundary != "zero" and self.dtype == np.float32:
-            level = np.float32(np.mean(plane, dtype=np.float64))
-            plane = plane - level
-        if self.boundary != "reflect":
-            buffer[top:top + ny, left:left + nx] = plane
-        elif max(self.pads[0] + self.pads[1]) < min(ny, nx):
-            _reflect_into(buffer, plane, self.pads)
-        else:  # margins wider than the field: repeated reflections
-            padded = np.pad(plane, self.pads, mode="symmetric")
-            buffer[:padded.shape[0], :padded.shape[1]] = padded
-            del padded
-        spectrum = scipy.fft.rfft2(buffer, workers=self.workers)
-        del buffer
-        spectrum *= self.transfer
-        n = self.fshape[0] // factor
-        folded = spectrum.reshape(factor, n, spectrum.shape[1]).sum(axis=0)
-        del spectrum
-        rows = scipy.fft.ifft(folded, axis=0, workers=self.workers)[:ndy]
-        del folded
-        fine = scipy.fft.irfft(rows, n=self.fshape[1], axis=1, workers=self.workers)[:, left:left + nx]
-        return fine.reshape(ndy, ndx, factor).sum(axis=2, dtype=np.float64) + float(level)

@@ -18,7 +18,8 @@ from gongsynth.geometry import wcs_header
 from gongsynth.instrument import resolve_instrument
 from gongsynth.validation import check_quantity
 
-__all__ = ["BOUNDARIES", "EARTH_RADIANCE_UNIT", "Scene", "radiance_at_earth", "sky_grid"]
+__all__ = ["BOUNDARIES", "EARTH_RADIANCE_UNIT", "DeferredPlane", "DeferredStack", "Scene",
+           "radiance_at_earth", "sky_grid"]
 
 #: Edge handling a scene may ask of the PSF (`gongsynth.stages.optics.convolve`).
 BOUNDARIES = ("periodic", "zero", "reflect")
@@ -29,17 +30,133 @@ EARTH_RADIANCE_UNIT = u.Unit("erg / (s cm2 arcsec2)")
 _SPECTRAL_EARTH_UNIT = u.Unit("erg / (s cm3 arcsec2)")
 
 
+class DeferredStack:
+    """
+    A stack of planes made on request, a block of rows at a time, never held whole.
+
+    The supersampled scene of a tiled run is 7 × 4300² samples; its planes are
+    each a cheap linear map of a small tile, so they are made where they are
+    used: the optics (`gongsynth.stages.imagers.BandLimitedImager`) read one
+    plane's rows block by block.  `materialize` (and a `Scene`'s ``data``)
+    makes the whole stack.
+
+    Parameters
+    ----------
+    shape : tuple of int
+        (k, ny, nx), or (ny, nx) for a single map.
+    dtype : dtype
+        Of the rows made.
+    unit : `~astropy.units.Unit` or None
+        Of the values.
+    rows : callable
+        ``rows(i, start, stop)`` → (stop - start, nx) array: rows of plane ``i``.
+    release : callable, optional
+        Frees whatever ``rows`` keeps between calls (called by `release`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> stack = DeferredStack((2, 3, 4), np.float32, None,
+    ...                       lambda i, a, b: np.full((b - a, 4), i, dtype=np.float32))
+    >>> stack.plane(1)[0:2].shape, stack.materialize().shape
+    ((2, 4), (2, 3, 4))
+    """
+
+    def __init__(self, shape, dtype, unit, rows, release=None):
+        self.shape = tuple(int(n) for n in shape)
+        self.dtype = np.dtype(dtype)
+        self.unit = unit
+        self._rows = rows
+        self._release = release
+
+    @property
+    def ndim(self):
+        """Number of dimensions (3 for a stack, 2 for a map)."""
+        return len(self.shape)
+
+    def plane(self, i=0):
+        """
+        Plane ``i`` as an object whose row slices (``plane[a:b]``) are made on request.
+
+        Parameters
+        ----------
+        i : int
+
+        Returns
+        -------
+        `DeferredPlane`
+        """
+        return DeferredPlane(self, i)
+
+    def __getitem__(self, i):
+        """Plane ``i`` of a stack (`plane`)."""
+        if self.ndim != 3 or not isinstance(i, (int, np.integer)):
+            raise TypeError("a deferred stack gives its planes by integer index (stack[i]); "
+                            "use materialize() for the whole stack")
+        return self.plane(int(i))
+
+    def materialize(self):
+        """
+        The whole stack.
+
+        Returns
+        -------
+        `numpy.ndarray` or `~astropy.units.Quantity`
+        """
+        k = self.shape[0] if self.ndim == 3 else 1
+        ny, nx = self.shape[-2:]
+        out = np.empty((k, ny, nx), dtype=self.dtype)
+        for i in range(k):
+            out[i] = self._rows(i, 0, ny)
+        self.release()
+        out = out.reshape(self.shape)
+        return out if self.unit is None else u.Quantity(out, self.unit, copy=False)
+
+    def release(self):
+        """Free what the row maker keeps between calls (caches)."""
+        if self._release is not None:
+            self._release()
+
+
+class DeferredPlane:
+    """
+    One plane of a `DeferredStack`: ``plane[a:b]`` makes rows a..b-1.
+
+    Parameters
+    ----------
+    stack : `DeferredStack`
+    index : int
+    """
+
+    def __init__(self, stack, index):
+        self.stack, self.index = stack, index
+        self.shape = stack.shape[-2:]
+        self.dtype = stack.dtype
+
+    def __array__(self, dtype=None, copy=None):
+        rows = self.stack._rows(self.index, 0, self.shape[0])
+        return rows if dtype is None else rows.astype(dtype, copy=False)
+
+    def __getitem__(self, key):
+        if not isinstance(key, slice) or key.step not in (None, 1):
+            raise TypeError("a deferred plane gives contiguous row slices only, e.g. plane[0:128]")
+        start, stop, _ = key.indices(self.shape[0])
+        return self.stack._rows(self.index, start, max(start, stop))
+
+
 class Scene:
     """
     Light arriving at the telescope on a supersampled helioprojective grid.
 
     Parameters
     ----------
-    data : `~astropy.units.Quantity`
+    data : `~astropy.units.Quantity` or `DeferredStack`
         The light: shape (6, NY, NX), radiance at Earth per arcsec² in
         erg s⁻¹ cm⁻² arcsec⁻².  A scene may also carry any other stack
         (k, NY, NX) or map (NY, NX) placed with the same geometry, in any unit
-        (e.g. the true B_LOS in G).
+        (e.g. the true B_LOS in G).  A `DeferredStack` is made plane by plane
+        where it is used (`planes`); ``data`` then makes it whole on first
+        access and keeps it.
     pixel_scale : `~astropy.units.Quantity`
         Grid spacing in arcsec (the same along both axes).
     header : `astropy.io.fits.Header` or dict
@@ -74,14 +191,17 @@ class Scene:
 
     def __init__(self, data, pixel_scale, header, *, boundary, instrument=None, detector_shape=None,
                  blos=None, centre=None, meta=None, placer=None, regions=None):
-        if not isinstance(data, u.Quantity):
+        if isinstance(data, DeferredStack):
+            if data.unit is None:
+                raise TypeError("a deferred scene stack must have a unit")
+        elif not isinstance(data, u.Quantity):
             raise TypeError(f"data must be an astropy Quantity, got {type(data).__name__}")
         if data.ndim not in (2, 3):
             raise ValueError(f"data must have shape (k, ny, nx) or (ny, nx), got {data.shape}")
         check_quantity(pixel_scale, u.arcsec, "pixel_scale")
         if boundary not in BOUNDARIES:
             raise ValueError(f"boundary must be one of {BOUNDARIES}, got {boundary!r}")
-        self.data = data
+        self._data = data
         self.pixel_scale = pixel_scale.to(u.arcsec)
         self.header = header
         self.boundary = boundary
@@ -91,10 +211,14 @@ class Scene:
             detector_shape = tuple(int(round(n * ratio)) for n in data.shape[-2:])
         self.detector_shape = tuple(int(n) for n in detector_shape)
         if blos is not None:
-            check_quantity(blos, u.G, "blos")
+            if isinstance(blos, DeferredStack):
+                if not u.Unit(blos.unit).is_equivalent(u.G):
+                    raise u.UnitsError(f"blos must be in G, got {blos.unit}")
+            else:
+                check_quantity(blos, u.G, "blos")
             if blos.shape != data.shape[-2:]:
                 raise ValueError(f"blos must have shape {data.shape[-2:]}, got {blos.shape}")
-        self.blos = blos
+        self._blos = blos
         self.centre = centre
         self.meta = dict(meta or {})
         self._placer = placer
@@ -102,9 +226,32 @@ class Scene:
                         else [(slice(0, data.shape[-2]), slice(0, data.shape[-1]), 1.0)])
 
     @property
+    def data(self):
+        """The stack as a `~astropy.units.Quantity` (a deferred one is made whole here, once)."""
+        if isinstance(self._data, DeferredStack):
+            self._data = self._data.materialize()
+        return self._data
+
+    @property
+    def planes(self):
+        """
+        The stack as it is held: a `~astropy.units.Quantity`, or a `DeferredStack` not yet made.
+
+        Indexing either gives plane ``i`` whose row slices are what the optics read.
+        """
+        return self._data
+
+    @property
+    def blos(self):
+        """True line-of-sight field (NY, NX) in G placed like the light, or None."""
+        if isinstance(self._blos, DeferredStack):
+            self._blos = self._blos.materialize()
+        return self._blos
+
+    @property
     def shape(self):
         """(nplanes, NY, NX) or (NY, NX)."""
-        return self.data.shape
+        return self._data.shape
 
     def resolution_map(self, instrument=None):
         """
@@ -121,7 +268,7 @@ class Scene:
             float64 (ny_det, nx_det): the magnification of the region holding
             each detector pixel's centre (2**k in quadrant k of a Fig. 8 scene).
         """
-        ny, nx = self.data.shape[-2:]
+        ny, nx = self.shape[-2:]
         ndy, ndx = self.detector_shape
         rows = ((np.arange(ndy) + 0.5) * ny / ndy).astype(int)
         cols = ((np.arange(ndx) + 0.5) * nx / ndx).astype(int)

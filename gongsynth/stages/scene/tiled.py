@@ -25,6 +25,7 @@ B_LOS is placed exactly like the light.
 import math
 
 import astropy.units as u
+import numba
 import numpy as np
 import scipy.sparse
 
@@ -32,7 +33,7 @@ from gongsynth.geometry import Pointing, wcs_header
 from gongsynth.instrument import resolve_instrument
 from gongsynth.planes import N_PLANES
 from gongsynth.stages.channels import CHANNEL_UNIT
-from gongsynth.stages.scene.scene import Scene, radiance_at_earth, sky_grid
+from gongsynth.stages.scene.scene import DeferredStack, Scene, radiance_at_earth, sky_grid
 from gongsynth.validation import check_finite, check_quantity
 
 __all__ = ["tile", "tiled_scenes"]
@@ -90,29 +91,108 @@ def _quadrants(shape, resolutions, detector_shape):
     return [(r, c, m) for (r, c), m in zip(spans, resolutions)]
 
 
+@numba.njit(inline="always", cache=True)
+def _sparse_row(indptr, indices, weights, first, narrow, out, r, row):
+    """``out[r] = Σ_k weights[k] narrow[indices[k]]`` over CSR row ``first + r`` (sums in ``row``)."""
+    row[:] = 0.0
+    for k in range(indptr[first + r], indptr[first + r + 1]):
+        w = weights[k]
+        src = narrow[indices[k]]
+        for c in range(out.shape[1]):
+            row[c] += w * src[c]
+    for c in range(out.shape[1]):
+        out[r, c] = row[c]
+
+
+@numba.njit(cache=True)
+def _sparse_rows(indptr, indices, weights, first, narrow, out):
+    """`_sparse_row` for every row of ``out``, on one thread: for the optics' blocks of rows."""
+    row = np.empty(out.shape[1])
+    for r in range(out.shape[0]):
+        _sparse_row(indptr, indices, weights, first, narrow, out, r, row)
+
+
+@numba.njit(parallel=True, cache=True)
+def _sparse_rows_parallel(indptr, indices, weights, first, narrow, out):
+    """`_sparse_row` for every row of ``out``, in parallel: for whole planes (few long calls)."""
+    for r in numba.prange(out.shape[0]):
+        _sparse_row(indptr, indices, weights, first, narrow, out, r, np.empty(out.shape[1]))
+
+
+# Below this many rows a call runs on one thread: the threads' start and join (and, on a
+# loaded machine, their waiting for each other) cost more than the work.
+_PARALLEL_ROWS = 1024
+
+
+class _Tiler:
+    """
+    Rows of the tiled planes on request: per region, ``opy @ (values[i] @ opx.T)``.
+
+    The narrow product ``values[i] @ opx.T`` (tile rows × the region's sky
+    columns, in the output's precision) of the first plane and of the latest one are kept, so a
+    plane read block by block, alternating with the first plane (the optics'
+    differences), is made once.
+    """
+
+    def __init__(self, values, pixel_km, shape, scale, km_per_arcsec, mu, regions, dtype):
+        k, ny, nx = values.shape
+        self.values, self.shape, self.dtype = values, tuple(shape), np.dtype(dtype)
+        # Sky offsets of pixel centres from the field centre, arcsec.
+        y_sky = (np.arange(shape[0]) + 0.5 - shape[0] / 2) * scale
+        x_sky = (np.arange(shape[1]) + 0.5 - shape[1] / 2) * scale
+        self.regions = []
+        for rows, cols, mag in regions:
+            per_px_x = km_per_arcsec / (mag * pixel_km)       # tile pixels per arcsec along x
+            per_px_y = km_per_arcsec / (mag * mu * pixel_km)  # ... along y (foreshortened)
+            opy = _footprint_operator(ny / 2 + y_sky[rows] * per_px_y, scale * per_px_y, ny)
+            opx = _footprint_operator(nx / 2 + x_sky[cols] * per_px_x, scale * per_px_x, nx)
+            self.regions.append((rows, cols, opy, opx))
+        self._narrow = {}
+
+    def _narrow_of(self, i):
+        if i not in self._narrow:
+            for j in [j for j in self._narrow if j != 0]:
+                del self._narrow[j]
+            # Small side first: (ny, NXq) for each region.
+            self._narrow[i] = [np.ascontiguousarray((opx @ self.values[i].T).T, dtype=self.dtype)
+                               for _, _, _, opx in self.regions]
+        return self._narrow[i]
+
+    def rows(self, i, start, stop):
+        """Rows ``start`` .. ``stop - 1`` of plane ``i``, (stop - start, NX) of the tiler's dtype."""
+        out = np.empty((stop - start, self.shape[1]), dtype=self.dtype)
+        for (rows, cols, opy, _), narrow in zip(self.regions, self._narrow_of(i)):
+            lo, hi = max(start, rows.start), min(stop, rows.stop)
+            if lo < hi:
+                kernel = _sparse_rows_parallel if hi - lo >= _PARALLEL_ROWS else _sparse_rows
+                kernel(opy.indptr, opy.indices, opy.data, lo - rows.start, narrow,
+                       out[lo - start:hi - start, cols])
+        return out
+
+    def release(self):
+        """Forget the kept narrow products."""
+        self._narrow.clear()
+
+
+def _tiler(values, pixel_km, shape, scale, km_per_arcsec, mu, regions, dtype=np.float64):
+    """`_Tiler` of plain float arrays (k, ny, nx), computed in float64 (products kept in ``dtype``)."""
+    return _Tiler(np.asarray(values, dtype=np.float64), pixel_km, shape, scale, km_per_arcsec, mu, regions,
+                  dtype)
+
+
 def _tile_stack(values, pixel_km, shape, scale, km_per_arcsec, mu, regions, dtype=np.float64):
-    """Core of `tile` on plain float arrays (k, ny, nx) -> (k, NY, NX) of ``dtype`` (computed in float64)."""
-    k, ny, nx = values.shape
-    NY, NX = shape
-    out = np.empty((k, NY, NX), dtype=dtype)
-    # Sky offsets of pixel centres from the field centre, arcsec.
-    y_sky = (np.arange(NY) + 0.5 - NY / 2) * scale
-    x_sky = (np.arange(NX) + 0.5 - NX / 2) * scale
-    for rows, cols, mag in regions:
-        per_px_x = km_per_arcsec / (mag * pixel_km)       # tile pixels per arcsec along x
-        per_px_y = km_per_arcsec / (mag * mu * pixel_km)  # ... along y (foreshortened)
-        opy = _footprint_operator(ny / 2 + y_sky[rows] * per_px_y, scale * per_px_y, ny)
-        opx = _footprint_operator(nx / 2 + x_sky[cols] * per_px_x, scale * per_px_x, nx)
-        for i in range(k):
-            # Small side first, and the big product lands in C order (no transposed writes).
-            narrow = np.ascontiguousarray((opx @ values[i].T).T)  # (ny, NXq)
-            out[i, rows, cols] = opy @ narrow
+    """Core of `tile` on plain float arrays (k, ny, nx) -> (k, NY, NX) of ``dtype``."""
+    tiler = _tiler(values, pixel_km, shape, scale, km_per_arcsec, mu, regions, dtype)
+    out = np.empty((values.shape[0],) + tuple(shape), dtype=dtype)
+    for i in range(values.shape[0]):
+        out[i] = tiler.rows(i, 0, shape[0])
+    tiler.release()
     return out
 
 
 @u.quantity_input
 def tile(stack, pixel_size: u.km, *, pointing=None, resolutions=(1, 2, 4, 8), instrument=None,
-         detector_shape=None, shape=None, dtype=np.float64):
+         detector_shape=None, shape=None, dtype=np.float64, deferred=False):
     """
     Cover the detector field with periodic copies of a tile (any stack).
 
@@ -133,12 +213,15 @@ def tile(stack, pixel_size: u.km, *, pointing=None, resolutions=(1, 2, 4, 8), in
     detector_shape, shape : int or (int, int), optional
         Detector pixels and supersampled grid (see `sky_grid`).
     dtype : {numpy.float64, numpy.float32}, optional
-        Precision of the result (computed in float64 either way; float32
-        halves the memory of the large supersampled stack).
+        Precision of the result and of its intermediate products (sums in
+        float64; float32 halves the memory of the large supersampled stack).
+    deferred : bool, optional
+        Return a `~gongsynth.stages.scene.scene.DeferredStack` whose rows are
+        made on request (the same numbers), instead of the whole stack.
 
     Returns
     -------
-    `numpy.ndarray` or `~astropy.units.Quantity`
+    `numpy.ndarray`, `~astropy.units.Quantity` or `~gongsynth.stages.scene.scene.DeferredStack`
         (k, NY, NX) (or (NY, NX)) of ``dtype`` on the supersampled grid.
 
     Raises
@@ -181,8 +264,12 @@ def tile(stack, pixel_size: u.km, *, pointing=None, resolutions=(1, 2, 4, 8), in
             f"(μ = {mu:.3g}): "
             f"smaller than one {plate:g}″ detector pixel"
         )
-    out = _tile_stack(values, pix, grid, scale.to_value(u.arcsec), kpa, mu,
-                      _quadrants(grid, res, det), dtype=np.dtype(dtype))
+    args = (values, pix, grid, scale.to_value(u.arcsec), kpa, mu, _quadrants(grid, res, det), np.dtype(dtype))
+    if deferred:
+        tiler = _tiler(*args)
+        shape = tuple(grid) if squeeze else (values.shape[0],) + tuple(grid)
+        return DeferredStack(shape, dtype, unit, tiler.rows, release=tiler.release)
+    out = _tile_stack(*args)
     if squeeze:
         out = out[0]
     return out if unit is None else u.Quantity(out, unit, copy=False)
@@ -211,11 +298,13 @@ def tiled_scenes(channels, blos, pixel_size: u.km, *, pointing=None, resolutions
     light : `Scene`
         Radiance at Earth per arcsec² (6, NY, NX), float32 (the optics
         transform float32 planes in float32: B and v change by < 0.01 G and
-        0.01 m/s, see the tests).  Boundary ``"periodic"``
+        0.01 m/s, see the tests), made where it is used, a block of rows at a
+        time (a `~gongsynth.stages.scene.scene.DeferredStack`: ``light.data``
+        makes it whole).  Boundary ``"periodic"``
         when the field holds a whole number of tiles at a single resolution,
         else ``"reflect"`` (the tiling continues smoothly past the edges).
     truth : `Scene` or None
-        B_LOS (NY, NX) in G, float32, same grid, boundary and WCS.
+        B_LOS (NY, NX) in G, float32, same grid, boundary and WCS (deferred too).
 
     Examples
     --------
@@ -237,7 +326,7 @@ def tiled_scenes(channels, blos, pixel_size: u.km, *, pointing=None, resolutions
     kwargs = dict(pointing=pointing, resolutions=resolutions, instrument=inst,
                   detector_shape=detector_shape, shape=shape)
     # Tiling is linear: convert the small tile to radiance at Earth, not the big scene.
-    data = tile(radiance_at_earth(channels), pixel_size, dtype=np.float32, **kwargs)
+    data = tile(radiance_at_earth(channels), pixel_size, dtype=np.float32, deferred=True, **kwargs)
     mu = pointing.mu
     grid, scale, det = sky_grid(inst, detector_shape=detector_shape, shape=shape)
     centre, km_per_arcsec = pointing.centre, pointing.km_per_arcsec
@@ -261,8 +350,8 @@ def tiled_scenes(channels, blos, pixel_size: u.km, *, pointing=None, resolutions
     header = wcs_header(grid, scale, centre, wavelength=inst.line_wavelength)
     truth = None
     if blos is not None:
-        truth = Scene(placer(blos, pixel_size).to(u.G), scale, header, meta={**meta, "quantity": "blos"},
-                      **common)
-    light = Scene(data, scale, header, blos=None if truth is None else truth.data,
+        placed = tile(blos.to(u.G), pixel_size, dtype=np.float32, deferred=True, **kwargs)
+        truth = Scene(placed, scale, header, meta={**meta, "quantity": "blos"}, **common)
+    light = Scene(data, scale, header, blos=None if truth is None else truth.planes,
                   meta={**meta, "quantity": "radiance"}, **common)
     return light, truth

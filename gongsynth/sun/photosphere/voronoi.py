@@ -1,0 +1,124 @@
+"""
+The two nearest of a set of seed points, for every column of a periodic grid.
+
+The model photosphere's granules and supergranules are Voronoi cells of
+random centres (`gongsynth.sun.photosphere.model`).  Their walls need, at every
+column, the nearest and second-nearest centre in the periodic box.  A k-d tree
+answers that at ~0.4 µs per column; the seeds here are spread evenly, so a
+grid of buckets about one seed spacing wide, searched ring by ring around the
+column until no closer seed can remain, gives the same answer (the exact
+minimum-image distances) at a tenth of the cost, in parallel over rows.
+"""
+import math
+
+import numba
+import numpy as np
+
+__all__ = ["nearest_two"]
+
+
+@numba.njit(cache=True)
+def _consider(d2, s, best):
+    """Insert seed ``s`` at squared distance ``d2`` into (d1², s1, d2², s2) ``best``."""
+    if d2 < best[0]:
+        best[2], best[3] = best[0], best[1]
+        best[0], best[1] = d2, s
+    elif d2 < best[2]:
+        best[2], best[3] = d2, s
+
+
+@numba.njit(parallel=True, cache=True)
+def _nearest_two_kernel(sx, sy, start, order, nbx, nby, cell_x, cell_y, nx, ny, dx, lx, ly,
+                        d1, d2, i1, i2):
+    n = sx.size
+    for iy in numba.prange(ny):
+        best = np.empty(4)
+        y = (iy + 0.5) * dx
+        by = min(int(y / cell_y), nby - 1)
+        for ix in range(nx):
+            x = (ix + 0.5) * dx
+            bx = min(int(x / cell_x), nbx - 1)
+            best[0], best[1], best[2], best[3] = np.inf, -1.0, np.inf, -1.0
+            ring = 0
+            while True:
+                if 2 * ring + 1 >= nbx or 2 * ring + 1 >= nby:
+                    # The rings would wrap onto themselves: every seed, once.
+                    best[0], best[1], best[2], best[3] = np.inf, -1.0, np.inf, -1.0
+                    for s in range(n):
+                        ex = sx[s] - x
+                        ex -= lx * math.floor(ex / lx + 0.5)
+                        ey = sy[s] - y
+                        ey -= ly * math.floor(ey / ly + 0.5)
+                        _consider(ex * ex + ey * ey, s, best)
+                    break
+                for oy in range(-ring, ring + 1):
+                    step = 1 if abs(oy) == ring else 2 * ring
+                    for ox in range(-ring, ring + 1, max(step, 1)):
+                        b = ((by + oy) % nby) * nbx + (bx + ox) % nbx
+                        for k in range(start[b], start[b + 1]):
+                            s = order[k]
+                            ex = sx[s] - x
+                            ex -= lx * math.floor(ex / lx + 0.5)
+                            ey = sy[s] - y
+                            ey -= ly * math.floor(ey / ly + 0.5)
+                            _consider(ex * ex + ey * ey, s, best)
+                # Seeds beyond this ring are at least `ring` buckets away.
+                reach = (ring - 1e-9) * min(cell_x, cell_y)
+                if best[3] >= 0 and best[2] <= reach * reach:
+                    break
+                ring += 1
+            p = iy * nx + ix
+            d1[p] = math.sqrt(best[0])
+            d2[p] = math.sqrt(best[2])
+            i1[p] = np.int64(best[1])
+            i2[p] = np.int64(best[3])
+
+
+def nearest_two(seeds, shape, spacing, box):
+    """
+    Distances to and indices of the two nearest seeds at every grid column (periodic box).
+
+    Parameters
+    ----------
+    seeds : `numpy.ndarray`
+        (n, 2) seed positions (x, y) in [0, Lx) × [0, Ly), n ≥ 2.
+    shape : (int, int)
+        (ny, nx) of the grid; column (iy, ix) sits at ((ix + 0.5) dx, (iy + 0.5) dx).
+    spacing : float
+        The grid spacing dx.
+    box : (float, float)
+        (Lx, Ly), the period.
+
+    Returns
+    -------
+    distance : `numpy.ndarray`
+        (ny * nx, 2) minimum-image distances to the nearest and second-nearest seed.
+    index : `numpy.ndarray`
+        (ny * nx, 2) int64 indices of those seeds.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> d, i = nearest_two(np.array([[0.5, 0.5], [3.5, 0.5]]), (1, 4), 1.0, (4.0, 1.0))
+    >>> d[:, 0].tolist(), i[:, 0].tolist()
+    ([0.0, 1.0, 1.0, 0.0], [0, 0, 1, 1])
+    """
+    seeds = np.asarray(seeds, dtype=np.float64)
+    ny, nx = shape
+    lx, ly = (float(b) for b in box)
+    n = seeds.shape[0]
+    if n < 2:
+        raise ValueError(f"nearest_two needs at least 2 seeds, got {n}")
+    # Buckets about one mean seed spacing wide: ~1 seed each.
+    mean_spacing = math.sqrt(lx * ly / n)
+    nbx, nby = max(1, int(lx / mean_spacing)), max(1, int(ly / mean_spacing))
+    cell_x, cell_y = lx / nbx, ly / nby
+    bucket = (np.minimum((seeds[:, 1] / cell_y).astype(np.int64), nby - 1) * nbx
+              + np.minimum((seeds[:, 0] / cell_x).astype(np.int64), nbx - 1))
+    order = np.argsort(bucket, kind="stable")
+    start = np.searchsorted(bucket[order], np.arange(nbx * nby + 1)).astype(np.int64)
+    d1, d2 = np.empty(ny * nx), np.empty(ny * nx)
+    i1, i2 = np.empty(ny * nx, dtype=np.int64), np.empty(ny * nx, dtype=np.int64)
+    _nearest_two_kernel(np.ascontiguousarray(seeds[:, 0]), np.ascontiguousarray(seeds[:, 1]), start, order,
+                        nbx, nby, cell_x, cell_y, nx, ny, float(spacing), lx, ly, d1, d2, i1, i2)
+    return np.column_stack([d1, d2]), np.column_stack([i1, i2])
