@@ -48,12 +48,12 @@ def estimate_memory(config):
     default (860 px, 10 min)                  1.48 GB     1.87 GB
     ``--shape 430 --duration 1``              0.80 GB     0.91 GB
     ``--shape 256 --duration 1``              0.78 GB     0.87 GB
-    ``--mode full-disk --duration 1``         1.62 GB     2.14 GB
+    ``--mode full-disk --duration 1``         1.48 GB     2.14 GB
     ========================================  ==========  ==========
 
     (before issue 17's streaming and float32 optics: 3.58 GB for the default
     run, 2.79 GB for the full disk; the full disk from the patch library of
-    issue 16: 1.62 GB when it builds the library, 1.39 GB when it loads it).
+    issue 16: 1.48 GB when it builds the library, 1.25 GB when it loads it).
 
     Parameters
     ----------
