@@ -5,16 +5,17 @@ A synthetic full-disk GONG map
 
 The paper avoided mapping its simulation onto the sphere.  `gongsynth.stages.scene.fulldisk`
 does it: every supersampled point of GONG's 860 × 860 field is traced to the
-solar surface, gets its own viewing angle μ and line-of-sight azimuth, takes
-the column of the periodic photosphere below it, and its spectrum is
-synthesised there (limb darkening included) and collapsed to the six channel
-planes.  The result is a full-disk scene that can stand beside a real GONG
+solar surface and gets its own viewing angle μ; the Sun's large-scale field
+there picks the small scales from a library of built-in photosphere patches
+(quiet Sun to plage, synthesised once at 11 viewing angles), laid in surface
+cells with their own offsets and turns, and every spectrum is Doppler
+shifted by the Sun's rotation, the observer's motion and the convective
+blueshift.  The result is a full-disk scene that can stand beside a real GONG
 magnetogram.
 
 To run in seconds this example uses ``supersampling=1`` (one sample per
-pixel); the default, 5 × 5 samples per pixel, takes one to two minutes and
-changes the counts by ~2.3 % rms (sub-pixel structure is point sampled, and
-more samples average it better).
+pixel); the default is 5 × 5 samples per pixel.  The library is built once
+(~15 s) and cached.
 """
 import astropy.units as u
 import matplotlib.pyplot as plt
@@ -26,30 +27,35 @@ from gongsynth.geometry import disk_geometry
 from gongsynth.stages.optics import expected_counts, observe
 from gongsynth.stages.reduction import reduce
 from gongsynth.stages.scene.fulldisk import full_disk_scene
-from gongsynth.sun.photosphere import model_photosphere
+from gongsynth.stages.scene.library import LIBRARY_SEED, cached_library
+from gongsynth.sun.surface_field import synthetic_surface_field
 
 # %%
-# The built-in photosphere repeats every 98 Mm, so a sunspot in it would appear
-# ~200 times over the disk; this example leaves the spot out and keeps the
-# plage, network and internetwork fields.
+# The library of patches (what a full-disk run builds, or loads from its cache)
+# and the large-scale field: the seeded synthetic Sun of 2014-04-01, near the
+# maximum of cycle 24.
 
 gong = GONGInstrument()
-photosphere = model_photosphere(shape=(512, 512), pixel_size=192 * u.km, seed=3, spot=False)
+library = cached_library(seed=LIBRARY_SEED, instrument=gong)
+print(library)
+date = "2014-04-01T18:00"
+field = synthetic_surface_field(date, seed=3)
 
 # %%
 # The scene and the expected counts
 # ---------------------------------
 #
 # `full_disk_scene` returns the light (radiance at Earth per arcsec², six
-# planes, zero beyond the limb) and the true line-of-sight field sampled at the
-# same points.  The optics then apply the PSF (with a dark sky beyond the
+# planes, zero beyond the limb) and the true line-of-sight field at the same
+# points.  The optics then apply the PSF (with a dark sky beyond the
 # field) and the pixelization.
 
-light, truth = full_disk_scene(photosphere, supersampling=1, instrument=gong)
+light, truth = full_disk_scene(library, supersampling=1, instrument=gong, obstime=date, surface_field=field,
+                               seed=1)
 counts = expected_counts(light)
 observed = reduce(counts.value, gong)
 header = light.detector_header
-geometry = disk_geometry(counts.shape[1:], gong.plate_scale)  # detector pixel centres
+geometry = disk_geometry(counts.shape[1:], gong.plate_scale, obstime=date)  # detector pixel centres
 continuum = sunpy.map.Map(counts.value.mean(axis=0), header)
 # Beyond the limb only the PSF wings remain: mask the magnetogram there.
 magnetogram = sunpy.map.Map(np.where(geometry.on_disk, observed.magnetogram.to_value(u.G), np.nan),
@@ -70,10 +76,10 @@ for i, (smap, kwargs, title) in enumerate([
 # Limb darkening
 # --------------
 #
-# Each point's spectrum is synthesised at its own μ, so the continuum falls
-# toward the limb as the Milne–Eddington source function prescribes.  The
-# counts of a channel plane are plotted against μ of the pixel centre; the
-# spread at each μ is granulation and the darker plage seen through the PSF.
+# Each point is seen at its own μ, so the continuum falls toward the limb as
+# the measured limb darkening prescribes.  The counts of a channel plane are
+# plotted against μ of the pixel centre; the spread at each μ is granulation,
+# the darker spots and the Doppler shifts moving the line in the passband.
 
 on = geometry.on_disk & (geometry.mu > 0.05)
 mu = geometry.mu[on]

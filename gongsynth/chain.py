@@ -35,6 +35,7 @@ import numpy as np
 from sunpy import log
 
 from gongsynth.geometry import Pointing, disk_geometry
+from gongsynth.observing import site_location
 from gongsynth.products.maps import PRODUCTS, make_product_map
 from gongsynth.seeding import child_sequence
 from gongsynth.stages import optics
@@ -42,6 +43,7 @@ from gongsynth.stages.camera.integrate import integrate
 from gongsynth.stages.channels import channel_images
 from gongsynth.stages.reduction import reduce
 from gongsynth.stages.scene.fulldisk import full_disk_scene
+from gongsynth.stages.scene.library import LIBRARY_SEED, cached_library
 from gongsynth.stages.scene.tiled import tiled_scenes
 from gongsynth.sun.atmosphere import Atmosphere
 from gongsynth.sun.photosphere import DeferredStokes
@@ -49,7 +51,8 @@ from gongsynth.sun.rt.synthesis import synthesize as rt_synthesize
 from gongsynth.sun.sampling import check_spectral_sampling
 from gongsynth.suns import SUNS
 
-__all__ = ["Stage", "Chain", "build_chain", "interactive", "run_header", "unmeasured", "SKY_FRACTION"]
+__all__ = ["Stage", "Chain", "build_chain", "interactive", "run_header", "unmeasured", "large_scale_field",
+           "SKY_FRACTION"]
 
 #: A pixel whose light is below this fraction of the brightest pixel's is too
 #: faint for a phase: every product is blanked there (see `unmeasured`).
@@ -189,7 +192,7 @@ def interactive():
     return sys.stderr.isatty()
 
 
-def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False):
+def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, surface_field=None):
     """
     The stages of one run, in order, for ``config``.
 
@@ -206,6 +209,9 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False):
         default the instrument's synthetic ones.
     progress : bool
         Progress bars inside long stages (only drawn on a terminal).
+    surface_field : `sunpy.map.GenericMap`, optional
+        Full-disk mode: the large-scale radial field (``config.surface_field``
+        names where it came from); None: the quiet Sun.
 
     Returns
     -------
@@ -220,7 +226,16 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False):
     pointing = Pointing(config.latitude, config.obstime)
     stages = Chain()
 
-    if stokes is None:
+    if stokes is None and config.mode == "full-disk":
+        def library():
+            knobs = {k: v for k, v in config.sun_arguments().items() if k not in ("shape", "pixel_size")}
+            # The library's own fixed seed: every run seed shares it (and its cache); the
+            # run's seed lays the patches out in the scene stage.
+            return {"photosphere": cached_library(seed=LIBRARY_SEED, knobs=knobs, instrument=inst)}
+
+        stages.append(Stage("photosphere", (), ("photosphere",), library,
+                            "the built-in Sun's patch library: quiet to plage, synthesised at 11 angles"))
+    elif stokes is None:
         def photosphere():
             return {"photosphere": SUNS[config.sun](seed=child_sequence(config.seed, "photosphere"),
                                                     **config.sun_arguments())}
@@ -235,11 +250,15 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False):
     if config.mode == "full-disk":
         def disk_scene(photosphere):
             light, truth = full_disk_scene(photosphere, detector_shape=config.detector_pixels,
-                                           obstime=config.obstime, instrument=inst, progress=progress)
+                                           obstime=config.obstime, instrument=inst, progress=progress,
+                                           surface_field=large_scale_field(config, surface_field),
+                                           seed=child_sequence(config.seed, "scene"),
+                                           site=site_location(config.site))
             return {"light": light, "truth_scene": truth}
 
         stages.append(Stage("scene", ("photosphere",), ("light", "truth_scene"), disk_scene,
-                            "synthesis at every point's own mu, mapped over the disk"))
+                            "the large-scale field filled with the library's small scales, rotation and "
+                            "the observer's motion in the spectra"))
     else:
         if stokes is None and config.sun == "model-atmosphere":
             def atmosphere_transfer(photosphere):
@@ -326,6 +345,38 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False):
                         tuple(f"{p}_map" for p in PRODUCTS), maps,
                         "sunpy Maps with helioprojective WCS; sky blanked"))
     return stages
+
+
+def large_scale_field(config, given=None):
+    """
+    The surface field a full-disk run follows (`gongsynth.sun.surface_field`).
+
+    Parameters
+    ----------
+    config : `~gongsynth.config.SimulationConfig`
+        ``surface_field = "synthetic"``: the seeded synthetic Sun at the run's
+        date (stream ``"surface-field"`` of the run's seed).
+    given : `sunpy.map.GenericMap`, optional
+        A map: a gongsynth surface field is used as it is; any other map (a
+        full-disk magnetogram, a synoptic map) goes through
+        `~gongsynth.sun.surface_field.surface_field_from_map` at the run's date.
+
+    Returns
+    -------
+    `sunpy.map.GenericMap` or None
+        None: the quiet Sun.
+    """
+    from gongsynth.sun.surface_field import surface_field_from_map, synthetic_surface_field
+    from gongsynth.sun.surface_field.maps import check_surface_field
+    if given is None:
+        if config.surface_field == "synthetic":
+            return synthetic_surface_field(config.obstime, seed=child_sequence(config.seed, "surface-field"))
+        return None
+    try:
+        check_surface_field(given)
+        return given
+    except ValueError:
+        return surface_field_from_map(given, config.obstime)
 
 
 def unmeasured(expected_counts, config):

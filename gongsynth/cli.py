@@ -90,6 +90,9 @@ def build_parser():
     sim.add_argument("--like", type=Path, metavar="GONG.fits",
                      help="take date, site and plate scale from a real GONG full-disk file ('what GONG "
                           "saw at Big Bear on 2009-09-05 18:54'); --date and --site still win")
+    sim.add_argument("--surface-field", dest="surface_field", metavar="synthetic|MAP.fits",
+                     help="full-disk mode: the Sun's large-scale field, 'synthetic' (the seeded synthetic "
+                          "Sun of the date) or a magnetogram / synoptic map (default: the quiet Sun)")
     sim.add_argument("--seed", type=_number(int, minimum=0),
                      help="root random seed (default: fresh, recorded)")
     sim.add_argument("--shape", type=_number(int, minimum=8), metavar="N",
@@ -141,7 +144,7 @@ def _simulation_config(args):
     changes = {}
     if args.duration is not None:
         changes["duration"] = args.duration * u.min
-    for name in ("engine", "mode", "seed", "workers", "obstime", "sun", "site"):
+    for name in ("engine", "mode", "seed", "workers", "obstime", "sun", "site", "surface_field"):
         if getattr(args, name) is not None:
             changes[name] = getattr(args, name)
     if args.like is not None:

@@ -56,6 +56,9 @@ _DOCS = {
     "workers": "threads for the frames engine (None: all cores)",
     "atmosphere_file": "a model atmosphere as the input Sun (MURaM folder, HDF5 or 1-D model path; "
                        "'<array>': passed in memory); unset: the built-in Sun",
+    "surface_field": "full-disk mode: the Sun's large-scale field: 'synthetic' (the seeded synthetic Sun of "
+                     "the date), a magnetogram or synoptic map's FITS path ('<array>': passed in memory); "
+                     "unset: the quiet Sun",
     "flat_file": "a user-supplied flat: its FITS path, or '<array>' (unset: the synthetic flat)",
     "flat_sha256": "SHA-256 of that flat, checked when the run is repeated",
     "dark_file": "a user-supplied dark: its FITS path, or '<array>' (unset: the synthetic dark)",
@@ -227,6 +230,12 @@ class SimulationConfig:
         A model atmosphere as the input Sun instead of the built-in one: its
         path (read by `gongsynth.Atmosphere.read`), or ``"<array>"`` when it
         was passed to `gongsynth.simulate` in memory.
+    surface_field : str or None
+        Full-disk mode: the large-scale radial field the small scales follow:
+        ``"synthetic"`` (`gongsynth.sun.surface_field.synthetic_surface_field`
+        at the run's date and seed), a magnetogram or synoptic map's FITS path,
+        or ``"<array>"`` when a map was passed to `gongsynth.simulate`; None:
+        the quiet Sun everywhere.
     flat_file, dark_file : str or None
         A user-supplied flat or dark: its FITS path, or ``"<array>"`` when it
         was passed as an array (None: the instrument's synthetic one).
@@ -264,6 +273,7 @@ class SimulationConfig:
     effects: Effects = field(default_factory=Effects)
     photosphere: dict = field(default_factory=dict)
     atmosphere_file: str | None = None
+    surface_field: str | None = None
     flat_file: str | None = None
     flat_sha256: str | None = None
     dark_file: str | None = None
@@ -323,6 +333,10 @@ class SimulationConfig:
         object.__setattr__(self, "site", check_site(self.site))
         if self.like is not None and not isinstance(self.like, str):
             raise TypeError(f"like must be the path of a GONG FITS file or None, got {self.like!r}")
+        if self.surface_field is not None and (not isinstance(self.surface_field, str)
+                                               or self.mode != "full-disk"):
+            raise ValueError(f"surface_field is 'synthetic' or a path (or '<array>') of a full-disk run, got "
+                             f"{self.surface_field!r} with mode = {self.mode!r}")
         for name in ("flat", "dark"):
             path, digest = getattr(self, f"{name}_file"), getattr(self, f"{name}_sha256")
             if (path is None) != (digest is None):

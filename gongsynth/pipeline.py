@@ -153,7 +153,7 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="bl
              instrument=None, mode="tiled", detector_shape=None, resolutions=(1, 2, 4, 8),
              obstime=None, sun=None, photosphere_shape=None, photosphere_pixel_size=None,
              effects=None, photosphere=None, flat=None, dark=None, workers=None, progress=True,
-             config=None):
+             config=None, surface_field=None):
     """
     Simulate a GONG observation end to end.
 
@@ -213,7 +213,15 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="bl
     config : `~gongsynth.config.SimulationConfig`, optional
         A complete configuration (e.g. ``result.config`` of an earlier run);
         it cannot be combined with the run arguments above (that is a
-        TypeError), only with ``stokes``, ``flat``, ``dark`` and ``progress``.
+        TypeError), only with ``stokes``, ``flat``, ``dark``, ``progress``
+        and ``surface_field``.
+    surface_field : `sunpy.map.GenericMap` or path-like, optional
+        Full-disk mode: the Sun's large-scale radial field that the small
+        scales follow: a `gongsynth.sun.surface_field` map, any magnetogram
+        or synoptic map (remapped by `~gongsynth.sun.surface_field.surface_field_from_map`
+        to the run's date), or a FITS path of one (recorded in the config as
+        ``surface_field``; ``surface_field="synthetic"`` in the config: the
+        seeded synthetic Sun of the run's date); default the quiet Sun.
 
     Returns
     -------
@@ -248,9 +256,11 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="bl
         raise TypeError(f"pass either config or the run's arguments, not both: {sorted(_given(arguments))}")
     check_resources(config)
     config, stokes = _input_atmosphere(config, stokes)
+    config, surface_field = _surface_field(config, surface_field)
     config, flat = _detector_map(config, "flat", flat)
     config, dark = _detector_map(config, "dark", dark)
-    chain = build_chain(config, stokes=stokes, flat=flat, dark=dark, progress=progress)
+    chain = build_chain(config, stokes=stokes, flat=flat, dark=dark, progress=progress,
+                        surface_field=surface_field)
     timings = {}
     state = chain.run(progress=progress, timings=timings)
     return SimulationResult(
@@ -300,6 +310,24 @@ def _input_atmosphere(config, stokes):
     if isinstance(stokes, Atmosphere) and recorded is None:
         return config.replace(atmosphere_file=IN_MEMORY), stokes
     return config, stokes
+
+
+def _surface_field(config, given):
+    """The full-disk run's large-scale field map and its record in the config (path or '<array>')."""
+    import sunpy.map
+    recorded = config.surface_field
+    if given is None:
+        if recorded is None or recorded == "synthetic":   # the chain builds the synthetic Sun
+            return config, None
+        if recorded == IN_MEMORY:
+            raise ValueError("this configuration's surface field was a map passed in memory "
+                             "(surface_field = '<array>'): pass it again as surface_field=")
+        given = recorded
+    if isinstance(given, (str, Path)):
+        return config.replace(surface_field=str(given)), sunpy.map.Map(str(given))
+    if not isinstance(given, sunpy.map.GenericMap):
+        raise TypeError(f"surface_field must be a sunpy Map or a FITS path, got {type(given).__name__}")
+    return config.replace(surface_field=IN_MEMORY), given
 
 
 def _given(arguments):

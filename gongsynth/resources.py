@@ -48,11 +48,12 @@ def estimate_memory(config):
     default (860 px, 10 min)                  1.48 GB     1.87 GB
     ``--shape 430 --duration 1``              0.80 GB     0.91 GB
     ``--shape 256 --duration 1``              0.78 GB     0.87 GB
-    ``--mode full-disk --duration 1``         1.35 GB     1.87 GB
+    ``--mode full-disk --duration 1``         1.48 GB     2.14 GB
     ========================================  ==========  ==========
 
     (before issue 17's streaming and float32 optics: 3.58 GB for the default
-    run, 2.79 GB for the full disk).
+    run, 2.79 GB for the full disk; the full disk from the patch library of
+    issue 16: 1.48 GB when it builds the library, 1.25 GB when it loads it).
 
     Parameters
     ----------
@@ -73,6 +74,10 @@ def estimate_memory(config):
     """
     inst = config.instrument
     columns = config.photosphere_shape[0] * config.photosphere_shape[1]
+    library = 0
+    if config.mode == "full-disk":
+        # The patch library (`gongsynth.stages.scene.library`): 256² columns per patch, held whole.
+        columns, library = 256 * 256, 350e6
     model = 450 * columns  # the photosphere model's temporaries
     if config.sun == "model-atmosphere" and config.atmosphere_file is None:
         # The 3-D atmosphere (9 float32 fields on 80 heights) and its synthesised Stokes cube
@@ -88,7 +93,7 @@ def estimate_memory(config):
     detector = 8 * config.detector_pixels ** 2 * 40
     frames = int((config.duration * inst.frame_rate).to_value(u.one))
     schedule = _SCHEDULE_BYTES_PER_FRAME * frames
-    return _MARGIN * (max(model, scene) + detector + schedule + 300e6) * u.byte  # + the loaded libraries
+    return _MARGIN * (max(model, scene) + library + detector + schedule + 300e6) * u.byte  # + the modules
 
 
 def available_memory():

@@ -127,6 +127,9 @@ def test_date_site_and_like_flags(tmp_path, capsys):
 
     args = build_parser().parse_args(["simulate", "--date", "2014-04-01T12:00", "--out", "o"])
     assert args.obstime == "2014-04-01T12:00"  # --date is --obstime
+    args = build_parser().parse_args(["simulate", "--mode", "full-disk", "--surface-field", "synthetic",
+                                      "--out", "o"])
+    assert args.surface_field == "synthetic"
     assert main(["simulate", "--site", "XX", "--out", str(tmp_path / "bad")]) == 2
     assert "site" in capsys.readouterr().err and not (tmp_path / "bad").exists()
     # "What GONG saw at Big Bear on 2009-09-05 18:54": the saved run records the file, its date,

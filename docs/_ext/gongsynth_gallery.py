@@ -17,6 +17,7 @@ ORDER = [
     "plot_frame_schedule.py",
     "plot_magnetograms.py",
     "plot_full_disk.py",
+    "plot_full_disk_vs_real.py",
     "plot_compare_real.py",
     "plot_latitude_sweep.py",
     "plot_why_gong_under_measures.py",

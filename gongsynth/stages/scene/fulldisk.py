@@ -35,11 +35,16 @@ from gongsynth.geometry import as_obstime, disk_geometry, wcs_header
 from gongsynth.instrument import resolve_instrument
 from gongsynth.planes import N_PLANES
 from gongsynth.stages.channels import CHANNEL_UNIT
+from gongsynth.stages.scene.disk_render import library_scene
+from gongsynth.stages.scene.library import PatchLibrary
 from gongsynth.stages.scene.scene import Scene, radiance_at_earth, sky_grid
 from gongsynth.sun.photosphere import Photosphere
 from gongsynth.validation import check_quantity
 
-__all__ = ["full_disk_scene"]
+__all__ = ["full_disk_scene", "DEFAULT_CELL"]
+
+#: Side of the surface cells that lay the library's patches with their own offsets and turns.
+DEFAULT_CELL = 30 * u.Mm
 
 def _column_index(geom_x, geom_y, ny, nx, pixel_km):
     """Periodic column of the photosphere under each point; tile centre at disk centre."""
@@ -114,18 +119,23 @@ class _Synthesiser:
 
 def full_disk_scene(source, *, obstime=None, instrument=None, detector_shape=None,
                     supersampling=None, wavelength=None, mueller=None, chunk_size=65536,
-                    progress=False):
+                    progress=False, surface_field=None, seed=0, site=None, velocities=True,
+                    cell_size=DEFAULT_CELL):
     """
     A synthetic full-disk scene and its ground truth.
 
     Parameters
     ----------
-    source : `~gongsynth.sun.photosphere.Photosphere` or sequence of `~gongsynth.sun.stokes.StokesCube`
-        A (periodic) photosphere, synthesised at every sample's own μ and
-        line-of-sight azimuth; or cubes of one patch at several μ, whose
-        channel images are interpolated linearly in μ (each cube keeps the
-        azimuth it was made with; samples beyond the cubes' μ range take the
-        nearest cube, with a warning).
+    source : `~gongsynth.stages.scene.library.PatchLibrary`, `~gongsynth.sun.photosphere.Photosphere` or list
+        A patch library (`gongsynth.stages.scene.library.build_library`): the
+        Sun's large-scale field from ``surface_field`` filled with the
+        library's small scales, rotation and the observer's motion in the
+        spectra (`gongsynth.stages.scene.disk_render.library_scene`).  Or, as before the library: a
+        (periodic) photosphere, synthesised at every sample's own μ and
+        line-of-sight azimuth and tiled periodically over the disk; or cubes
+        of one patch at several μ, whose channel images are interpolated
+        linearly in μ (each cube keeps the azimuth it was made with; samples
+        beyond the cubes' μ range take the nearest cube, with a warning).
     obstime : `~astropy.time.Time` or str, optional
         Observer at Earth; default `gongsynth.geometry.DEFAULT_OBSTIME` (B0 ≈ 0).
     instrument : `~gongsynth.GONGInstrument`, optional
@@ -147,6 +157,21 @@ def full_disk_scene(source, *, obstime=None, instrument=None, detector_shape=Non
         Samples synthesised at once (memory ≈ 0.8 kB per sample).
     progress : bool, optional
         Show a tqdm progress bar.
+    surface_field : `sunpy.map.GenericMap`, optional
+        Library only: a heliographic map of the radial flux density B_r (G)
+        that the small scales follow (`gongsynth.stages.scene.surface`);
+        NaN or no map: the quiet Sun.
+    seed : int or `numpy.random.SeedSequence`, optional
+        Library only: the cells' offsets, turns, mirrors and polarities.
+    site : `~astropy.coordinates.EarthLocation`, optional
+        Library only: the ground site whose daily rotation adds to the
+        observer's velocity; default the Earth's centre.
+    velocities : bool or dict, optional
+        Library only: shift the spectra by the large-scale velocity (True:
+        rotation, observer and convective blueshift; False: none; a dict
+        switches them one by one, keys ``rotation``, ``observer``, ``blueshift``).
+    cell_size : `~astropy.units.Quantity`, optional
+        Library only: side of the surface cells (default `DEFAULT_CELL`).
 
     Returns
     -------
@@ -169,6 +194,15 @@ def full_disk_scene(source, *, obstime=None, instrument=None, detector_shape=Non
     ((6, 24, 24), True)
     """
     inst = resolve_instrument(instrument)
+    if isinstance(source, PatchLibrary):
+        if wavelength is not None or mueller is not None:
+            raise ValueError("a PatchLibrary holds its spectral grid and Mueller matrix: give them to "
+                             "build_library, not to full_disk_scene")
+        return library_scene(source, obstime=obstime, instrument=inst, detector_shape=detector_shape,
+                             supersampling=supersampling, surface_field=surface_field, seed=seed, site=site,
+                             velocities=velocities, cell_size=cell_size)
+    if surface_field is not None or site is not None:
+        raise ValueError("surface_field and site need a PatchLibrary source")
     if supersampling is None:
         supersampling = inst.supersampling
     if isinstance(supersampling, bool) or not isinstance(supersampling, (int, np.integer)) \

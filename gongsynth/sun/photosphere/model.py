@@ -270,7 +270,8 @@ def model_photosphere(*, shape=(1024, 1024), pixel_size=96 * u.km, seed=0, spot=
                       evershed_speed=2.0 * u.km / u.s, moat_speed=0.8 * u.km / u.s,
                       granule_size=1.2 * u.Mm, granulation_contrast=0.08,
                       granulation_velocity=1.0 * u.km / u.s, horizontal_velocity=1.5 * u.km / u.s,
-                      supergranule_size=25 * u.Mm, network_flux_density=8 * u.G, plage=True,
+                      supergranule_size=25 * u.Mm, network_flux_density=8 * u.G, network_polarity=0.55,
+                      plage=True,
                       plage_flux_density=200 * u.G, element_field=1500 * u.G,
                       internetwork_field=25 * u.G, internetwork_horizontal_field=60 * u.G):
     """
@@ -315,6 +316,10 @@ def model_photosphere(*, shape=(1024, 1024), pixel_size=96 * u.km, seed=0, spot=
         Mean spacing of supergranule centres (25 Mm); the network lies on their edges.
     network_flux_density : `~astropy.units.Quantity`, optional
         Mean unsigned flux density of network elements over the box (8 G).
+    network_polarity : float, optional
+        Fraction of the network elements with positive polarity (0.55: the
+        box's slight net positive flux; 0.5 balanced, 0.9 a unipolar
+        enhanced network or plage).
     plage : bool, optional
         Include the two plage patches.
     plage_flux_density : `~astropy.units.Quantity`, optional
@@ -364,6 +369,9 @@ def model_photosphere(*, shape=(1024, 1024), pixel_size=96 * u.km, seed=0, spot=
     b_el = check_scalar(element_field, u.G, "element_field")
     in_v = check_scalar(internetwork_field, u.G, "internetwork_field", positive=False)
     in_h = check_scalar(internetwork_horizontal_field, u.G, "internetwork_horizontal_field", positive=False)
+    polarity = _fraction(network_polarity, "network_polarity")
+    if polarity > 1:
+        raise ValueError(f"network_polarity must be a number in [0, 1], got {network_polarity!r}")
     i_u = _fraction(umbra_continuum, "umbra_continuum")
     i_p = _fraction(penumbra_continuum, "penumbra_continuum")
     contrast = _fraction(granulation_contrast, "granulation_contrast")
@@ -431,7 +439,7 @@ def model_photosphere(*, shape=(1024, 1024), pixel_size=96 * u.km, seed=0, spot=
     rng = stage_generator(root, "photosphere", _NETWORK)
     area = grid.Lx * grid.Ly * 1e10                                      # cm²
     fluxes = _power_law_fluxes(rng, net * area)
-    signs = np.where(rng.uniform(size=fluxes.size) < 0.55, 1.0, -1.0)
+    signs = np.where(rng.uniform(size=fluxes.size) < polarity, 1.0, -1.0)
     bz_el = _render_elements(grid, rng, network_weight * keep_out, fluxes, signs, b_el)
 
     # ---- plage: a negative and a positive patch of dense elements
@@ -491,7 +499,8 @@ def model_photosphere(*, shape=(1024, 1024), pixel_size=96 * u.km, seed=0, spot=
             "umbra_continuum": i_u, "penumbra_continuum": i_p, "evershed_speed_km_s": v_e,
             "moat_speed_km_s": v_m, "granule_size_km": gran, "granulation_contrast": contrast,
             "granulation_velocity_km_s": v_g, "horizontal_velocity_km_s": v_h,
-            "supergranule_size_km": sg, "network_flux_density_G": net, "plage": bool(plage),
+            "supergranule_size_km": sg, "network_flux_density_G": net, "network_polarity": polarity,
+            "plage": bool(plage),
             "plage_flux_density_G": plage_b, "element_field_G": b_el, "internetwork_field_G": in_v,
             "internetwork_horizontal_field_G": in_h,
         },
