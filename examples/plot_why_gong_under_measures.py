@@ -226,22 +226,19 @@ plt.show()
 # measurements of ``scripts/weak_flux_factors.py``, shipped as
 # ``gongsynth/data/weak_flux_factors.ecsv`` because they take an hour — far too
 # long for a documentation build.  Error bars are the standard error over the
-# seeds (each seed a different Sun).  Beside them, the shipped calibration
-# table's factors, made the same way from the Milne–Eddington toy Sun (one
-# line strength everywhere), and the papers' statement.
-
-from gongsynth.analysis.calibration_table import read_calibration_table
+# seeds (each seed a different Sun).  Beside them, the same runs of the
+# Milne–Eddington toy Sun (one line strength everywhere, 1024² columns of
+# 96 km, the same seeds), and the papers' statement.
 
 table = QTable.read(files("gongsynth") / "data" / "weak_flux_factors.ecsv")
 sweep = table[table["label"] == "model-atmosphere"]
-toy = read_calibration_table()
-toy = toy[toy["region"] == "quiet"]
+toy = table[table["label"] == "milne-eddington"]
 
 fig, ax = plt.subplots(figsize=(7, 4.5), layout="constrained")
 ax.errorbar(sweep["latitude"].to_value(u.deg), sweep["factor"], sweep["uncertainty"], marker="o",
             capsize=3, label="3-D model Sun through LTE radiative transfer (the default)")
 ax.errorbar(toy["latitude"].to_value(u.deg) + 0.8, toy["factor"], toy["uncertainty"], marker="s",
-            capsize=3, label="Milne–Eddington toy Sun (shipped calibration table)")
+            capsize=3, label="Milne–Eddington toy Sun")
 ax.plot([0, 75], [2.2, 1.0], color="0.5", lw=8, alpha=0.3, solid_capstyle="round",
         label="paper III: more than 2 at disk centre, about 1 near the limb")
 ax.axhline(1, color="k", lw=0.5)
