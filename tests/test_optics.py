@@ -329,7 +329,9 @@ def test_band_limited_operator_leaves_out_only_what_lies_beyond_the_detector_nyq
     want = reference_observe(plane, kernel, boundary)
     exact = ExactImager(plane.shape, kernel, boundary, 5, np.float64, 1)(plane)
     imager = BandLimitedImager(plane.shape, kernel, boundary, 5, np.float64, 1)
-    assert np.array_equal(got, imager(plane))
+    # observe is this operator: the same bits with current numpy/scipy; with the oldest supported
+    # (numpy 2.0, scipy 1.13) two constructions of it differ by about one ulp (8.9e-16 measured).
+    assert np.max(np.abs(got - imager(plane))) <= 1e-14 * np.max(want)
     assert np.max(np.abs(exact - want)) < 1e-13 * np.max(want)
     if boundary == "periodic":
         padded = plane
