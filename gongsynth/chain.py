@@ -355,7 +355,7 @@ def large_scale_field(config, given=None):
     ----------
     config : `~gongsynth.config.SimulationConfig`
         ``surface_field = "synthetic"``: the seeded synthetic Sun at the run's
-        date (stream ``"surface-field"`` of the run's seed).
+        date (stream ``"surface-field"`` of the run's seed); ``"quiet"``: none.
     given : `sunpy.map.GenericMap`, optional
         A map: a gongsynth surface field is used as it is; any other map (a
         full-disk magnetogram, a synoptic map) goes through

@@ -90,9 +90,10 @@ def build_parser():
     sim.add_argument("--like", type=Path, metavar="GONG.fits",
                      help="take date, site and plate scale from a real GONG full-disk file ('what GONG "
                           "saw at Big Bear on 2009-09-05 18:54'); --date and --site still win")
-    sim.add_argument("--surface-field", dest="surface_field", metavar="synthetic|MAP.fits",
+    sim.add_argument("--surface-field", dest="surface_field", metavar="synthetic|quiet|MAP.fits",
                      help="full-disk mode: the Sun's large-scale field, 'synthetic' (the seeded synthetic "
-                          "Sun of the date) or a magnetogram / synoptic map (default: the quiet Sun)")
+                          "Sun of the date; default), 'quiet' (the quiet Sun everywhere) or a magnetogram / "
+                          "synoptic map")
     sim.add_argument("--seed", type=_number(int, minimum=0),
                      help="root random seed (default: fresh, recorded)")
     sim.add_argument("--shape", type=_number(int, minimum=8), metavar="N",

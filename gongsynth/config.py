@@ -29,12 +29,18 @@ from gongsynth.stages.camera.schedule import n_frames_in
 from gongsynth.suns import DEFAULT_SUNS, SUNS, default_sun, photosphere_defaults, run_grid_default
 from gongsynth.tomlfmt import toml_table
 
-__all__ = ["SimulationConfig", "Effects", "ENGINES", "MODES", "DEFAULT_OBSTIME", "IN_MEMORY"]
+__all__ = ["SimulationConfig", "Effects", "ENGINES", "MODES", "DEFAULT_OBSTIME", "DEFAULT_SURFACE_FIELD",
+           "SURFACE_FIELD_NAMES", "IN_MEMORY"]
 
 #: Scene modes accepted by `SimulationConfig.mode`.
 MODES = tuple(DEFAULT_SUNS)
 #: Default observation time (B0 ≈ 0), as an ISO string.
 DEFAULT_OBSTIME = _DEFAULT_TIME.isot
+#: The large-scale field of a full-disk run unless one is given: the seeded
+#: synthetic Sun of the run's date (its activity follows the cycle phase).
+DEFAULT_SURFACE_FIELD = "synthetic"
+#: The named large-scale fields (anything else is a map's path or '<array>').
+SURFACE_FIELD_NAMES = ("synthetic", "quiet")
 #: The recorded "path" of a flat or dark that was passed as an array.
 IN_MEMORY = "<array>"
 
@@ -57,8 +63,8 @@ _DOCS = {
     "atmosphere_file": "a model atmosphere as the input Sun (MURaM folder, HDF5 or 1-D model path; "
                        "'<array>': passed in memory); unset: the built-in Sun",
     "surface_field": "full-disk mode: the Sun's large-scale field: 'synthetic' (the seeded synthetic Sun of "
-                     "the date), a magnetogram or synoptic map's FITS path ('<array>': passed in memory); "
-                     "unset: the quiet Sun",
+                     "the date; the default), 'quiet' (the quiet Sun everywhere), a magnetogram or synoptic "
+                     "map's FITS path ('<array>': passed in memory)",
     "flat_file": "a user-supplied flat: its FITS path, or '<array>' (unset: the synthetic flat)",
     "flat_sha256": "SHA-256 of that flat, checked when the run is repeated",
     "dark_file": "a user-supplied dark: its FITS path, or '<array>' (unset: the synthetic dark)",
@@ -233,9 +239,10 @@ class SimulationConfig:
     surface_field : str or None
         Full-disk mode: the large-scale radial field the small scales follow:
         ``"synthetic"`` (`gongsynth.sun.surface_field.synthetic_surface_field`
-        at the run's date and seed), a magnetogram or synoptic map's FITS path,
-        or ``"<array>"`` when a map was passed to `gongsynth.simulate`; None:
-        the quiet Sun everywhere.
+        at the run's date and seed; the default, recorded), ``"quiet"`` (the
+        quiet Sun everywhere), a magnetogram or synoptic map's FITS path, or
+        ``"<array>"`` when a map was passed to `gongsynth.simulate`.  None in
+        tiled mode.
     flat_file, dark_file : str or None
         A user-supplied flat or dark: its FITS path, or ``"<array>"`` when it
         was passed as an array (None: the instrument's synthetic one).
@@ -333,10 +340,12 @@ class SimulationConfig:
         object.__setattr__(self, "site", check_site(self.site))
         if self.like is not None and not isinstance(self.like, str):
             raise TypeError(f"like must be the path of a GONG FITS file or None, got {self.like!r}")
+        if self.surface_field is None and self.mode == "full-disk":
+            object.__setattr__(self, "surface_field", DEFAULT_SURFACE_FIELD)
         if self.surface_field is not None and (not isinstance(self.surface_field, str)
                                                or self.mode != "full-disk"):
-            raise ValueError(f"surface_field is 'synthetic' or a path (or '<array>') of a full-disk run, got "
-                             f"{self.surface_field!r} with mode = {self.mode!r}")
+            raise ValueError(f"surface_field is 'synthetic', 'quiet' or a path (or '<array>') of a full-disk "
+                             f"run, got {self.surface_field!r} with mode = {self.mode!r}")
         for name in ("flat", "dark"):
             path, digest = getattr(self, f"{name}_file"), getattr(self, f"{name}_sha256")
             if (path is None) != (digest is None):
@@ -376,8 +385,9 @@ class SimulationConfig:
         """
         Return a copy with some fields changed (validated again).
 
-        A change of ``mode`` moves ``sun`` to the new mode's default where it
-        held the old mode's (and was not changed too).  A change of ``sun``
+        A change of ``mode`` moves ``sun`` and ``surface_field`` to the new
+        mode's defaults where they held the old mode's (and were not changed
+        too).  A change of ``sun``
         also moves ``photosphere_shape`` and ``photosphere_pixel_size`` to the
         new Sun's defaults where they held the old Sun's defaults (and were
         not changed too).
@@ -393,6 +403,9 @@ class SimulationConfig:
         """
         if "mode" in changes and "sun" not in changes and self.sun == default_sun(self.mode):
             changes["sun"] = None      # the mode's default Sun follows the mode
+        if "mode" in changes and "surface_field" not in changes \
+                and self.surface_field == DEFAULT_SURFACE_FIELD:
+            changes["surface_field"] = None  # so does the full disk's default field
         if changes.get("sun", self.sun) != self.sun:
             for name, key in (("photosphere_shape", "shape"), ("photosphere_pixel_size", "pixel_size")):
                 if name not in changes and _same(getattr(self, name), run_grid_default(self.sun, key)):

@@ -15,7 +15,7 @@ import astropy.units as u
 import numpy as np
 
 from gongsynth.chain import build_chain
-from gongsynth.config import IN_MEMORY, Effects, SimulationConfig
+from gongsynth.config import IN_MEMORY, SURFACE_FIELD_NAMES, Effects, SimulationConfig
 from gongsynth.files import fingerprint
 from gongsynth.optional import import_optional
 from gongsynth.resources import check_resources
@@ -219,9 +219,9 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="bl
         Full-disk mode: the Sun's large-scale radial field that the small
         scales follow: a `gongsynth.sun.surface_field` map, any magnetogram
         or synoptic map (remapped by `~gongsynth.sun.surface_field.surface_field_from_map`
-        to the run's date), or a FITS path of one (recorded in the config as
-        ``surface_field``; ``surface_field="synthetic"`` in the config: the
-        seeded synthetic Sun of the run's date); default the quiet Sun.
+        to the run's date), a FITS path of one (recorded in the config as
+        ``surface_field``), ``"synthetic"`` (the seeded synthetic Sun of the
+        run's date: the default) or ``"quiet"`` (the quiet Sun everywhere).
 
     Returns
     -------
@@ -316,8 +316,10 @@ def _surface_field(config, given):
     """The full-disk run's large-scale field map and its record in the config (path or '<array>')."""
     import sunpy.map
     recorded = config.surface_field
+    if isinstance(given, str) and given in SURFACE_FIELD_NAMES:
+        return config.replace(surface_field=given), None
     if given is None:
-        if recorded is None or recorded == "synthetic":   # the chain builds the synthetic Sun
+        if recorded is None or recorded in SURFACE_FIELD_NAMES:   # the chain builds the synthetic Sun
             return config, None
         if recorded == IN_MEMORY:
             raise ValueError("this configuration's surface field was a map passed in memory "

@@ -99,6 +99,20 @@ def test_the_built_in_sun_and_its_defaults():
     assert "element_field" in photosphere_defaults("model-atmosphere")
 
 
+def test_the_full_disk_follows_the_synthetic_sun_by_default():
+    """A full-disk run's large-scale field is the synthetic Sun of its date unless told otherwise; the
+    default follows the mode, a choice stays, and tiled runs have none."""
+    disk = SimulationConfig(seed=1, mode="full-disk")
+    assert disk.surface_field == "synthetic"
+    assert SimulationConfig.from_toml(disk.to_toml()) == disk
+    assert disk.replace(mode="tiled").surface_field is None
+    assert disk.replace(mode="tiled").replace(mode="full-disk") == disk
+    quiet = disk.replace(surface_field="quiet")
+    assert quiet.replace(seed=2).surface_field == "quiet"
+    with pytest.raises(ValueError, match="surface_field"):
+        quiet.replace(mode="tiled")      # a field the user chose does not silently vanish
+
+
 def test_knobs_belong_to_the_chosen_sun():
     with pytest.raises(KeyError, match="for sun = 'model-atmosphere'"):
         SimulationConfig(sun="model-atmosphere", photosphere={"umbra_radius_km": 1})
