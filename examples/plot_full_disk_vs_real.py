@@ -11,8 +11,9 @@ the convective blueshift before the filters (see the scene guide).  This
 example puts two such runs beside real data:
 
 1. a seeded quiet Sun dated like the real GONG magnetogram from Big Bear of
-   2009-09-05 18:54 (solar minimum), with that file's date, site and plate
-   scale (``like``), its large-scale field the synthetic Sun of the date;
+   2009-09-05 18:54 (solar minimum), with that file's date, site, plate
+   scale and pointing (``like``), its large-scale field the synthetic Sun of
+   the date;
 2. a run whose large-scale field is the SOHO/MDI full-disk magnetogram of
    2010-10-15 (same Ni I line), beside that magnetogram degraded to GONG.
 
@@ -50,12 +51,16 @@ MDI = REAL / "mdi" / "mdi.fd_m_96m_lev182.20101015_000000_TAI.data.fits"
 # -------------------------------------
 #
 # ``like_gong`` reads the date, the site (Big Bear: its rotation adds to the
-# observer's velocity) and the plate scale (2.56″ per pixel) from the real
-# file's header.  The run lasts 10 minutes like the real average (``ACCUM``).
+# observer's velocity), the plate scale (2.56″ per pixel) and the pointing
+# (the disk's centre sits 11.6 pixels east and 1.9 south of the image's, so
+# the simulated disk lies on the real one's pixels) from the real file's
+# header.  The real map is the average of nine one-minute magnetograms
+# (``N_USED = 9``), so the run integrates 9 minutes.  Both maps are solar
+# north up: GONG's reduction takes out the P angle (the header's ``PA``).
 
 real = gongsynth.load_observation(BIG_BEAR)
 settings, instrument = like_gong(BIG_BEAR)
-config = SimulationConfig(mode="full-disk", duration=10 * u.min, seed=1, surface_field="synthetic",
+config = SimulationConfig(mode="full-disk", duration=9 * u.min, seed=1, surface_field="synthetic",
                           instrument=instrument.replace(supersampling=3), **settings)
 quiet = gongsynth.simulate(config=config, progress=False)
 
@@ -100,7 +105,8 @@ ax.legend()
 # than 1/v0 assumes.
 
 doppler = quiet.doppler
-g = disk_geometry(doppler.data.shape, instrument.plate_scale, obstime=config.obstime)
+g = disk_geometry(doppler.data.shape, instrument.plate_scale, obstime=config.obstime,
+                  pointing=config.pointing)
 row = doppler.data.shape[0] // 2
 model = disk_velocity(g.longitude[row] * u.deg, g.latitude[row] * u.deg, g.mu[row], config.obstime,
                       site=site_location("BB"))
@@ -110,7 +116,7 @@ doppler.plot(axes=ax, norm=Normalize(-2500, 2500), cmap="RdBu_r", title="gongsyn
 ax = fig.add_subplot(1, 2, 2)
 ax.plot(doppler.data[row], ",", label="measured")
 ax.plot(model.to_value(u.m / u.s), label="rotation + observer + blueshift")
-ax.set(xlabel="pixel (the disk's central row)", ylabel="v (m/s)")
+ax.set(xlabel="pixel (the detector's central row)", ylabel="v (m/s)")
 ax.legend()
 
 # %%

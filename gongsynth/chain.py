@@ -253,7 +253,7 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
                                            obstime=config.obstime, instrument=inst, progress=progress,
                                            surface_field=large_scale_field(config, surface_field),
                                            seed=child_sequence(config.seed, "scene"),
-                                           site=site_location(config.site))
+                                           site=site_location(config.site), pointing=config.pointing)
             return {"light": light, "truth_scene": truth}
 
         stages.append(Stage("scene", ("photosphere",), ("light", "truth_scene"), disk_scene,
@@ -410,7 +410,8 @@ def unmeasured(expected_counts, config):
     faint = light < SKY_FRACTION * light.max()
     if config.mode != "full-disk":
         return faint
-    off_disk = ~disk_geometry(light.shape, config.instrument.plate_scale, obstime=config.obstime).on_disk
+    off_disk = ~disk_geometry(light.shape, config.instrument.plate_scale, obstime=config.obstime,
+                              pointing=config.pointing).on_disk
     return faint | off_disk
 
 

@@ -5,7 +5,8 @@ The ``gongsynth`` command line.
 
     gongsynth simulate [--config run.toml] [--latitude 60] [--duration 10] [--engine frames]
                        [--seed 1] [--workers N] [--mode tiled|full-disk] [--shape 256]
-                       [--date ISO] [--site BB] [--like GONG.fits] [--no-psf] [--no-photon-noise] ...
+                       [--date ISO] [--site BB] [--like GONG.fits] [--pointing TX TY]
+                       [--no-psf] [--no-photon-noise] ...
                        [--overwrite] [--quiet]
                        --out DIR
     gongsynth compare SIM.fits OBS.fits [--out FIGURE.png]
@@ -90,6 +91,9 @@ def build_parser():
     sim.add_argument("--like", type=Path, metavar="GONG.fits",
                      help="take date, site and plate scale from a real GONG full-disk file ('what GONG "
                           "saw at Big Bear on 2009-09-05 18:54'); --date and --site still win")
+    sim.add_argument("--pointing", type=_number(float), nargs=2, metavar=("TX", "TY"),
+                     help="full-disk mode: helioprojective x and y of the detector's centre in arcsec "
+                          "(default 0 0: the Sun's centre; --like takes the real file's)")
     sim.add_argument("--surface-field", dest="surface_field", metavar="synthetic|quiet|MAP.fits",
                      help="full-disk mode: the Sun's large-scale field, 'synthetic' (the seeded synthetic "
                           "Sun of the date; default), 'quiet' (the quiet Sun everywhere) or a magnetogram / "
@@ -148,8 +152,11 @@ def _simulation_config(args):
     for name in ("engine", "mode", "seed", "workers", "obstime", "sun", "site", "surface_field"):
         if getattr(args, name) is not None:
             changes[name] = getattr(args, name)
+    if args.pointing is not None:
+        changes["pointing"] = args.pointing * u.arcsec
     if args.like is not None:
-        taken, changes["instrument"] = like_gong(args.like, settings=changes, instrument=config.instrument)
+        taken, changes["instrument"] = like_gong(args.like, settings=changes, instrument=config.instrument,
+                                                 mode=changes.get("mode", config.mode))
         changes.update(taken)
     off = {e.name: False for e in dataclasses.fields(Effects) if getattr(args, f"no_{e.name}")}
     if off:

@@ -49,6 +49,8 @@ _QUANTITIES = {
     "latitude": (u.deg, "heliographic latitude of the field centre on the central meridian"),
     "duration": (u.min, "length of the observation (GONG magnetograms: 1 min; the paper: 10 min)"),
     "photosphere_pixel_size": (u.km, "column spacing of the built-in Sun"),
+    "pointing": (u.arcsec, "full-disk mode: helioprojective (Tx, Ty) of the detector's centre; "
+                           "[0, 0]: the Sun's centre"),
 }
 _DOCS = {
     "engine": "camera engine: 'blocks' (fast, statistically exact) or 'frames' (frame by frame)",
@@ -147,6 +149,22 @@ class Effects:
         if bad:
             raise KeyError(f"unknown key(s) {bad} in [{where}]; valid keys are {known}")
         return cls(**table)
+
+
+def _pointing(value, mode):
+    """``pointing`` as a tuple of two angles in arcsec (equality-friendly), checked against the mode."""
+    try:
+        both = u.Quantity(value)
+    except (TypeError, ValueError):
+        both = None
+    if both is None or both.shape != (2,) or not both.unit.is_equivalent(u.arcsec) \
+            or not np.all(np.isfinite(both.value)):
+        raise ValueError(f"pointing must be two finite angles (Tx, Ty), e.g. [30, -5] * u.arcsec, "
+                         f"got {value!r}")
+    if np.any(both.value != 0) and mode != "full-disk":
+        raise ValueError(f"pointing (Tx, Ty) = {both} moves a full-disk detector; a tiled run points at "
+                         f"its latitude (mode = {mode!r})")
+    return tuple(both.to(u.arcsec))
 
 
 def _same(a, b):
@@ -251,8 +269,12 @@ class SimulationConfig:
     site : str or None
         The observer's GONG site code (``"BB"``: Big Bear); None: the Earth's centre.
     like : str or None
-        A real GONG file whose date, site and plate scale the run took (see
-        `gongsynth.observing.like_gong`; keys given explicitly win).
+        A real GONG file whose date, site, plate scale and pointing the run
+        took (see `gongsynth.observing.like_gong`; keys given explicitly win).
+    pointing : tuple of `~astropy.units.Quantity`
+        Full-disk mode: helioprojective (Tx, Ty) of the detector's centre
+        (default (0, 0): the Sun's centre on the detector's centre; a real
+        GONG image is off centre by up to a few tens of arcsec).
     instrument : `~gongsynth.GONGInstrument`
         The instrument.
 
@@ -287,6 +309,7 @@ class SimulationConfig:
     dark_sha256: str | None = None
     site: str | None = None
     like: str | None = None
+    pointing: tuple = (0 * u.arcsec, 0 * u.arcsec)
     instrument: GONGInstrument = field(default_factory=GONGInstrument)
 
     def __post_init__(self):
@@ -301,8 +324,10 @@ class SimulationConfig:
             object.__setattr__(self, "photosphere_shape", run_grid_default(self.sun, "shape"))
         if self.photosphere_pixel_size is None:
             object.__setattr__(self, "photosphere_pixel_size", run_grid_default(self.sun, "pixel_size"))
+        object.__setattr__(self, "pointing", _pointing(self.pointing, self.mode))
         for name, (unit, _) in _QUANTITIES.items():
             value = getattr(self, name)
+            value = value if name != "pointing" else u.Quantity(value)
             if not isinstance(value, u.Quantity) or not value.unit.is_equivalent(unit):
                 raise u.UnitsError(f"{name} must be a Quantity convertible to {unit}, got {value!r}")
         n_frames_in(self.duration, self.instrument)  # finite, positive, a whole number of frames
@@ -528,6 +553,7 @@ class SimulationConfig:
         instrument = GONGInstrument.from_dict(table.get("instrument", {}))
         if sim.get("like") is not None:
             sim, instrument = like_gong(sim["like"], settings=sim, instrument=instrument,
+                                        mode=sim.get("mode", cls.mode),
                                         fixed_plate_scale="plate_scale" in table.get("instrument", {}))
         return cls(instrument=instrument, effects=Effects.from_dict(table.get("effects", {})),
                    photosphere=table.get("photosphere", {}), **sim)

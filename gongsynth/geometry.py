@@ -26,7 +26,8 @@ from astropy.time import Time
 from gongsynth.validation import check_quantity
 
 __all__ = ["DEFAULT_OBSTIME", "TELESCOPE", "Pointing", "DiskGeometry", "as_obstime", "check_geometry",
-           "disk_geometry", "field_centre", "los_basis", "viewing_geometry", "wcs_header"]
+           "disk_geometry", "field_centre", "los_basis", "pointing_centre", "pointing_offset",
+           "viewing_geometry", "wcs_header"]
 
 
 def check_geometry(mu, los_azimuth, shape):
@@ -385,6 +386,63 @@ Examples
 """
 
 
+def pointing_offset(pointing):
+    """
+    A pointing (Tx, Ty) checked and in radians: the offsets of a grid's centre from the Sun's.
+
+    Parameters
+    ----------
+    pointing : `~astropy.units.Quantity` or None
+        Two angles; None: (0, 0).
+
+    Returns
+    -------
+    (float, float)
+
+    Examples
+    --------
+    >>> import astropy.units as u
+    >>> [round(v * 206264.806, 3) for v in pointing_offset([30, -4.5] * u.arcsec)]
+    [30.0, -4.5]
+    """
+    if pointing is None:
+        return 0.0, 0.0
+    if isinstance(pointing, (tuple, list)) and all(isinstance(v, u.Quantity) for v in pointing):
+        pointing = u.Quantity(pointing)   # a configuration's (Tx, Ty)
+    check_quantity(pointing, u.arcsec, "pointing")
+    values = pointing.to_value(u.rad)
+    if values.shape != (2,) or not np.all(np.isfinite(values)):
+        raise ValueError(f"pointing must be two finite angles (Tx, Ty), got {pointing}")
+    return float(values[0]), float(values[1])
+
+
+def pointing_centre(pointing, obstime):
+    """
+    The helioprojective coordinate of a full-disk grid's centre, seen from Earth at ``obstime``.
+
+    Parameters
+    ----------
+    pointing : `~astropy.units.Quantity` or None
+        (Tx, Ty); None: the Sun's centre.
+    obstime : `~astropy.time.Time` or str
+
+    Returns
+    -------
+    `~astropy.coordinates.SkyCoord`
+
+    Examples
+    --------
+    >>> import astropy.units as u
+    >>> c = pointing_centre([30, 0] * u.arcsec, "2009-09-05T18:54")
+    >>> round(float(c.Tx.to_value(u.arcsec)), 6), c.observer.radius.unit
+    (30.0, Unit("AU"))
+    """
+    from sunpy.coordinates import Helioprojective, get_earth
+    time = as_obstime(obstime)
+    x0, y0 = pointing_offset(pointing)
+    return SkyCoord(x0 * u.rad, y0 * u.rad, frame=Helioprojective(observer=get_earth(time), obstime=time))
+
+
 def _observer(obstime):
     from sunpy.coordinates import get_earth, sun
     from sunpy.sun.constants import radius
@@ -394,13 +452,14 @@ def _observer(obstime):
     return time, distance, float(b0), radius.to_value(u.km)
 
 
-def disk_geometry(shape, pixel_scale, *, obstime=None, rows=None):
+def disk_geometry(shape, pixel_scale, *, obstime=None, rows=None, pointing=None):
     """
-    Trace every sample of a grid centred on the Sun to the solar sphere.
+    Trace every sample of a grid centred on the Sun (or near it) to the solar sphere.
 
     Pixel (i, j) looks along the gnomonic (TAN) direction of helioprojective
-    offsets ((j - (nx-1)/2) × pixel_scale, (i - (ny-1)/2) × pixel_scale) from
-    the Sun's centre, solar north up, as in the scene's WCS.
+    offsets (Tx + (j - (nx-1)/2) × pixel_scale, Ty + (i - (ny-1)/2) × pixel_scale)
+    from the Sun's centre, solar north up, as in the scene's WCS; (Tx, Ty) is
+    the ``pointing`` of the grid's centre.
 
     Parameters
     ----------
@@ -412,6 +471,9 @@ def disk_geometry(shape, pixel_scale, *, obstime=None, rows=None):
         Observer at Earth at this time; default `gongsynth.geometry.DEFAULT_OBSTIME`.
     rows : slice, optional
         Only these rows (for chunked processing).
+    pointing : `~astropy.units.Quantity`, optional
+        Helioprojective (Tx, Ty) of the grid's centre (default the Sun's
+        centre; a real GONG image is off centre by up to tens of arcsec).
 
     Returns
     -------
@@ -429,8 +491,9 @@ def disk_geometry(shape, pixel_scale, *, obstime=None, rows=None):
     rows = slice(0, ny) if rows is None else rows
     _, dist, b0, radius = _observer(obstime)
     h = pixel_scale.to_value(u.rad)
-    yy = (np.arange(ny)[rows] - (ny - 1) / 2) * h
-    xx = (np.arange(nx) - (nx - 1) / 2) * h
+    x0, y0 = pointing_offset(pointing)
+    yy = y0 + (np.arange(ny)[rows] - (ny - 1) / 2) * h
+    xx = x0 + (np.arange(nx) - (nx - 1) / 2) * h
     x, y = np.meshgrid(xx, yy)
     q = x * x + y * y
     norm = np.sqrt(1 + q)

@@ -54,7 +54,8 @@ Ephemeris = namedtuple("Ephemeris", ["p_angle", "b0", "l0", "distance", "angular
 
 #: The geometry of a real GONG full-disk observation (see `gong_view`).
 GONGView = namedtuple("GONGView", ["obstime", "site", "location", "plate_scale", "disk_centre",
-                                   "disk_radius", "p_angle", "b0", "distance", "angular_radius", "path"])
+                                   "disk_radius", "p_angle", "b0", "distance", "angular_radius", "path",
+                                   "pointing"])
 
 
 def check_site(site):
@@ -177,7 +178,9 @@ def gong_view(source):
         radius over the mean fitted limb radius), ``disk_centre`` ((x, y)
         0-based pixels), ``disk_radius`` (pix), ``p_angle``, ``b0`` (deg, or
         None where the header has no B0), ``distance`` (AU),
-        ``angular_radius`` (arcsec), ``path``.
+        ``angular_radius`` (arcsec), ``path``, ``pointing`` (helioprojective
+        (Tx, Ty) of the image's centre: the disk centre's offset from it
+        times the plate scale).
 
     Raises
     ------
@@ -219,13 +222,17 @@ def gong_view(source):
     p_angle = (float(header["PA"]) * u.rad).to(u.deg) if "PA" in header else None
     distance = float(header["DISTANCE"]) * u.AU if "DISTANCE" in header else None
     centre = tuple(float(header.get(f"FNDLMB{a}C", header[f"CRPIX{i}"])) - 1 for i, a in ((1, "X"), (2, "Y")))
-    return GONGView(obstime, code, location, angular / (limb / u.pix), centre, limb, p_angle, b0, distance,
-                    angular, path)
+    scale = angular / (limb / u.pix)
+    # The image's centre, (n - 1) / 2 in 0-based pixels, west and north of the disk centre.
+    size = [int(header.get(f"NAXIS{i}", 860)) for i in (1, 2)]
+    pointing = u.Quantity([((n - 1) / 2 - c) for n, c in zip(size, centre)]) * scale.to(u.arcsec)
+    return GONGView(obstime, code, location, scale, centre, limb, p_angle, b0, distance, angular, path,
+                    pointing)
 
 
-def like_gong(path, *, settings=None, instrument=None, fixed_plate_scale=False):
+def like_gong(path, *, settings=None, instrument=None, fixed_plate_scale=False, mode="full-disk"):
     """
-    The run settings of "what GONG saw" in a real full-disk file: its date, site and plate scale.
+    The run settings of "what GONG saw" in a real full-disk file: its date, site, plate scale and pointing.
 
     Parameters
     ----------
@@ -237,13 +244,17 @@ def like_gong(path, *, settings=None, instrument=None, fixed_plate_scale=False):
         The instrument to give the file's plate scale (default the standard one).
     fixed_plate_scale : bool
         Keep ``instrument``'s plate scale (it was given explicitly).
+    mode : {"full-disk", "tiled"}
+        The run's mode: only a full-disk run takes the file's pointing.
 
     Returns
     -------
     settings : dict
-        ``settings`` with ``like`` (the path), ``obstime`` and ``site`` added
-        where they were missing.  The file is not read when nothing is
-        missing, so a saved run configuration repeats without it.
+        ``settings`` with ``like`` (the path), ``obstime``, ``site`` and
+        ``pointing`` (where the image's centre looks, so that the simulated
+        disk sits on the same pixels as the real one) added where they were
+        missing.  The file is not read when nothing is missing, so a saved
+        run configuration repeats without it.
     instrument : `~gongsynth.GONGInstrument`
         With the file's plate scale (apparent radius / fitted limb radius).
 
@@ -259,11 +270,14 @@ def like_gong(path, *, settings=None, instrument=None, fixed_plate_scale=False):
     settings = dict(settings or {})
     instrument = GONGInstrument() if instrument is None else instrument
     settings.setdefault("like", str(path))
-    if {"obstime", "site"} <= set(settings) and fixed_plate_scale:
+    wanted = {"obstime", "site"} | ({"pointing"} if mode == "full-disk" else set())
+    if wanted <= set(settings) and fixed_plate_scale:
         return settings, instrument
     view = gong_view(path)
     settings.setdefault("obstime", view.obstime.isot)
     settings.setdefault("site", view.site if view.site in GONG_SITES else None)
+    if mode == "full-disk":
+        settings.setdefault("pointing", view.pointing)
     if not fixed_plate_scale:
         instrument = instrument.replace(plate_scale=view.plate_scale.to(u.arcsec))
     return settings, instrument

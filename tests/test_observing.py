@@ -51,10 +51,21 @@ def test_a_run_like_big_bear_has_its_disk():
     assert 2.55 < view.plate_scale.to_value(u.arcsec) < 2.57
     real = load_real(BIG_BEAR, "magnetogram")
     real_radius = np.sqrt(np.isfinite(real.data).sum() / np.pi)
-    geometry = disk_geometry((860, 860), view.plate_scale, obstime=view.obstime)
+    geometry = disk_geometry((860, 860), view.plate_scale, obstime=view.obstime, pointing=view.pointing)
     simulated_radius = np.sqrt(geometry.on_disk.sum() / np.pi)
     assert simulated_radius == pytest.approx(real_radius, abs=0.5)
     assert simulated_radius == pytest.approx(view.disk_radius.to_value(u.pix), abs=0.5)
+    # The pointing (the image centre 11.6 px west and 1.9 px north of the disk centre) puts the
+    # simulated disk on the real one's pixels: same centroid to a tenth of a pixel, and the two
+    # masks differ only along the limb's one-pixel rim (a circumference of ~2300 pixels).
+    rows, cols = np.nonzero(np.isfinite(real.data))
+    sim_rows, sim_cols = np.nonzero(geometry.on_disk)
+    assert sim_cols.mean() == pytest.approx(cols.mean(), abs=0.1)
+    assert sim_rows.mean() == pytest.approx(rows.mean(), abs=0.1)
+    assert (geometry.on_disk != np.isfinite(real.data)).sum() < 2 * np.pi * real_radius
+    assert view.pointing.to_value(u.arcsec) == pytest.approx(
+        [(429.5 - view.disk_centre[0]) * view.plate_scale.to_value(u.arcsec),
+         (429.5 - view.disk_centre[1]) * view.plate_scale.to_value(u.arcsec)])
 
 
 def test_sites():
@@ -88,6 +99,7 @@ def test_like_in_toml_and_explicit_keys_win(tmp_path):
 
 
 def test_like_gong_reads_the_header_only_when_needed(tmp_path):
-    settings, inst = like_gong(tmp_path / "absent.fits", settings={"obstime": "2009-01-01", "site": "BB"},
+    settings, inst = like_gong(tmp_path / "absent.fits", settings={"obstime": "2009-01-01", "site": "BB",
+                                                                   "pointing": [0, 0] * u.arcsec},
                                fixed_plate_scale=True)
     assert settings["like"].endswith("absent.fits") and inst.plate_scale == 2.5 * u.arcsec

@@ -101,7 +101,7 @@ def cell_table(radius, cell_km, distance, b0):
 
 
 @nb.njit(cache=True, parallel=True, error_model="numpy")
-def render_disk(light, truth, h, distance, b0, radius,
+def render_disk(light, truth, h, x0, y0, distance, b0, radius,
                 field, velocity, grid_lon0, grid_lat0, grid_step,
                 cell_km, cells, cell_j0, cell_i0, seed, theta, ld_coeff,
                 level_net, level_first, level_count, level_uniform,
@@ -116,6 +116,8 @@ def render_disk(light, truth, h, distance, b0, radius,
         float32 (6, NY, NX) and (NY, NX) outputs (zero beyond the limb), written in place.
     h : float
         Grid spacing (rad).
+    x0, y0 : float
+        Helioprojective offsets of the grid's centre from the Sun's (rad).
     distance, b0, radius : float
         Observer distance (km), B0 (rad), solar radius (km).
     field, velocity : `numpy.ndarray`
@@ -175,9 +177,9 @@ def render_disk(light, truth, h, distance, b0, radius,
         acc = np.empty(k_row)
         amp = np.empty((3, j))
         tot = np.empty(3)
-        y = (row - (big_y - 1) / 2) * h
+        y = y0 + (row - (big_y - 1) / 2) * h
         for col in range(big_x):
-            x = (col - (big_x - 1) / 2) * h
+            x = x0 + (col - (big_x - 1) / 2) * h
             # -- the ray to the sphere (gongsynth.geometry.disk_geometry)
             q = x * x + y * y
             norm = math.sqrt(1 + q)

@@ -11,9 +11,8 @@ import warnings
 
 import astropy.units as u
 import numpy as np
-from astropy.coordinates import SkyCoord
 
-from gongsynth.geometry import as_obstime, wcs_header
+from gongsynth.geometry import as_obstime, pointing_centre, pointing_offset, wcs_header
 from gongsynth.planes import N_PLANES
 from gongsynth.seeding import as_seed_sequence
 from gongsynth.stages.channels import CHANNEL_UNIT
@@ -44,7 +43,8 @@ def _scene_seed(seed):
 
 
 def library_scene(library, *, obstime=None, instrument=None, detector_shape=None, supersampling=None,
-                  surface_field=None, seed=0, site=None, velocities=True, cell_size=30 * u.Mm):
+                  surface_field=None, seed=0, site=None, velocities=True, cell_size=30 * u.Mm,
+                  pointing=None):
     """
     The light and true B·n of the whole disk from a patch library.
 
@@ -70,6 +70,8 @@ def library_scene(library, *, obstime=None, instrument=None, detector_shape=None
         Which large-scale velocities shift the spectra (`VELOCITY_TERMS`).
     cell_size : `~astropy.units.Quantity`, optional
         Side of the surface cells (default 30 Mm).
+    pointing : `~astropy.units.Quantity`, optional
+        Helioprojective (Tx, Ty) of the detector's centre (default the Sun's centre).
 
     Returns
     -------
@@ -91,7 +93,7 @@ def library_scene(library, *, obstime=None, instrument=None, detector_shape=None
     >>> light.shape, bool(light.data[0, 43, 43].value > 0), bool(light.data[0, 0, 0].value == 0)
     ((6, 86, 86), True, True)
     """
-    from sunpy.coordinates import Helioprojective, get_earth, sun
+    from sunpy.coordinates import get_earth, sun
     from sunpy.sun.constants import radius
 
     from gongsynth.instrument import resolve_instrument
@@ -121,7 +123,7 @@ def library_scene(library, *, obstime=None, instrument=None, detector_shape=None
     r_sun = radius.to_value(u.km)
     cells, (cell_j0, cell_i0) = cell_table(r_sun, cell_km, distance, b0)
     on_disk, outside = render_disk(
-        light, blos, scale.to_value(u.rad), distance, b0, r_sun,
+        light, blos, scale.to_value(u.rad), *pointing_offset(pointing), distance, b0, r_sun,
         large.field, large.velocity, float(large.longitude[0]), float(large.latitude[0]),
         float(large.longitude[1] - large.longitude[0]),
         cell_km, cells, cell_j0, cell_i0, _scene_seed(seed), np.radians(library.theta),
@@ -138,8 +140,7 @@ def library_scene(library, *, obstime=None, instrument=None, detector_shape=None
     if outside:
         warnings.warn(f"{outside} samples have a large-scale velocity beyond the library's Doppler basis "
                       f"(±{basis.max_velocity:.0f}): clamped", stacklevel=3)
-    centre = SkyCoord(0 * u.arcsec, 0 * u.arcsec,
-                      frame=Helioprojective(observer=get_earth(time), obstime=time))
+    centre = pointing_centre(pointing, time)
     header = wcs_header(grid, scale, centre, wavelength=inst.line_wavelength)
     meta = dict(mode="full-disk", obstime=time, supersampling=int(supersampling), source="library",
                 photosphere_pixel_size=library.pixel_size, cell_size=cell_km * u.km, velocities=terms,

@@ -29,9 +29,8 @@ import warnings
 
 import astropy.units as u
 import numpy as np
-from astropy.coordinates import SkyCoord
 
-from gongsynth.geometry import as_obstime, disk_geometry, wcs_header
+from gongsynth.geometry import as_obstime, disk_geometry, pointing_centre, wcs_header
 from gongsynth.instrument import resolve_instrument
 from gongsynth.planes import N_PLANES
 from gongsynth.stages.channels import CHANNEL_UNIT
@@ -120,7 +119,7 @@ class _Synthesiser:
 def full_disk_scene(source, *, obstime=None, instrument=None, detector_shape=None,
                     supersampling=None, wavelength=None, mueller=None, chunk_size=65536,
                     progress=False, surface_field=None, seed=0, site=None, velocities=True,
-                    cell_size=DEFAULT_CELL):
+                    cell_size=DEFAULT_CELL, pointing=None):
     """
     A synthetic full-disk scene and its ground truth.
 
@@ -172,6 +171,9 @@ def full_disk_scene(source, *, obstime=None, instrument=None, detector_shape=Non
         switches them one by one, keys ``rotation``, ``observer``, ``blueshift``).
     cell_size : `~astropy.units.Quantity`, optional
         Library only: side of the surface cells (default `DEFAULT_CELL`).
+    pointing : `~astropy.units.Quantity`, optional
+        Helioprojective (Tx, Ty) of the detector's centre (default the Sun's
+        centre; `gongsynth.observing.like_gong` reads a real GONG image's).
 
     Returns
     -------
@@ -200,7 +202,7 @@ def full_disk_scene(source, *, obstime=None, instrument=None, detector_shape=Non
                              "build_library, not to full_disk_scene")
         return library_scene(source, obstime=obstime, instrument=inst, detector_shape=detector_shape,
                              supersampling=supersampling, surface_field=surface_field, seed=seed, site=site,
-                             velocities=velocities, cell_size=cell_size)
+                             velocities=velocities, cell_size=cell_size, pointing=pointing)
     if surface_field is not None or site is not None:
         raise ValueError("surface_field and site need a PatchLibrary source")
     if supersampling is None:
@@ -236,7 +238,7 @@ def full_disk_scene(source, *, obstime=None, instrument=None, detector_shape=Non
         from tqdm import tqdm
         blocks = tqdm(blocks, desc="full-disk synthesis", unit="block")
     for rows in blocks:
-        g = disk_geometry(grid, scale, obstime=obstime, rows=rows)
+        g = disk_geometry(grid, scale, obstime=obstime, rows=rows, pointing=pointing)
         if not g.on_disk.any():
             continue
         iy, ix = _column_index(g.x[g.on_disk], g.y[g.on_disk], ny_tile, nx_tile, pixel_km)
@@ -254,13 +256,11 @@ def full_disk_scene(source, *, obstime=None, instrument=None, detector_shape=Non
             f"{engine.mu[-1]:.3g}]: they use the nearest cube (no extrapolation)", stacklevel=2)
     data = u.Quantity(light, to_earth.unit, copy=False)
     time = as_obstime(obstime)
-    from sunpy.coordinates import Helioprojective, get_earth
-    centre = SkyCoord(0 * u.arcsec, 0 * u.arcsec,
-                      frame=Helioprojective(observer=get_earth(time), obstime=time))
+    centre = pointing_centre(pointing, time)
     header = wcs_header(grid, scale, centre, wavelength=inst.line_wavelength)
 
     def placer(stack, size):
-        return _place(stack, size, grid, scale, obstime, chunk_size)
+        return _place(stack, size, grid, scale, obstime, chunk_size, pointing)
 
     meta = dict(mode="full-disk", obstime=time, supersampling=int(supersampling),
                 photosphere_pixel_size=engine.pixel_size.to(u.km))
@@ -274,7 +274,7 @@ def full_disk_scene(source, *, obstime=None, instrument=None, detector_shape=Non
     return light_scene, truth_scene
 
 
-def _place(stack, pixel_size, grid, scale, obstime, chunk_size):
+def _place(stack, pixel_size, grid, scale, obstime, chunk_size, pointing):
     """Sample any stack (k, ny, nx) of the periodic photosphere grid at each on-disk point."""
     check_quantity(pixel_size, u.km, "pixel_size")
     unit = stack.unit if isinstance(stack, u.Quantity) else None
@@ -285,7 +285,7 @@ def _place(stack, pixel_size, grid, scale, obstime, chunk_size):
         raise ValueError(f"stack must have shape (k, ny, nx) or (ny, nx), got {np.shape(stack)}")
     out = np.zeros((values.shape[0],) + grid)
     for rows in _row_blocks(grid[0], grid[1], chunk_size):
-        g = disk_geometry(grid, scale, obstime=obstime, rows=rows)
+        g = disk_geometry(grid, scale, obstime=obstime, rows=rows, pointing=pointing)
         iy, ix = _column_index(g.x[g.on_disk], g.y[g.on_disk], values.shape[1], values.shape[2],
                                pixel_size.to_value(u.km))
         view = out[:, rows]
