@@ -5,15 +5,58 @@ Prints the wall-clock time of each stage, the total, and the peak resident
 memory of the process.  The stage baselines (plain-numpy references) live in
 the per-stage benchmarks (bench_synthesis, bench_optics, bench_camera).
 
-    python benchmarks/bench_pipeline.py [--shape 860] [--engine blocks]
+``--process N`` instead times N whole ``gongsynth simulate`` processes (what a
+user waits for: imports, the run, the saved files and the quick-look) with
+their CPU time and peak memory, next to the floor every such process pays:
+a Python that only imports sunpy.map and matplotlib (the same machine, the
+same minute).
+
+    python benchmarks/bench_pipeline.py [--shape 860] [--engine blocks] [--sun milne-eddington]
+    python benchmarks/bench_pipeline.py --process 3 --sun milne-eddington
 """
 import argparse
+import os
 import resource
+import subprocess
+import sys
+import tempfile
 import time
 
 import astropy.units as u
 
 import gongsynth
+
+_FLOOR = "import sunpy.map, matplotlib.figure, astropy.io.fits"
+
+
+def _child(command):
+    """(wall s, CPU s, peak RSS MB) of one child process."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    start = time.perf_counter()
+    subprocess.run(command, check=True, stdout=subprocess.DEVNULL)
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    # ru_maxrss of the children is the largest of any child so far (KiB on Linux).
+    return wall, cpu, after.ru_maxrss / 1024
+
+
+def processes(args):
+    cli = [sys.executable, "-c", "import sys; from gongsynth.cli import main; sys.exit(main())"]
+    print(f"gongsynth {gongsynth.__version__}: {args.process} whole processes; load average "
+          f"{os.getloadavg()[0]:.2f} at the start")
+    floor = [_child([sys.executable, "-c", _FLOOR]) for _ in range(2)]
+    print(f"  floor ({_FLOOR}): {min(w for w, _, _ in floor):.2f} s wall, "
+          f"{min(c for _, c, _ in floor):.2f} s CPU")
+    with tempfile.TemporaryDirectory() as folder:
+        for k in range(args.process):
+            command = cli + ["simulate", "--seed", "1", "--quiet", "--out", os.path.join(folder, f"run{k}"),
+                             "--duration", str(args.duration), "--mode", args.mode]
+            command += ["--sun", args.sun] if args.sun else []
+            command += ["--shape", str(args.shape)] if args.shape else []
+            wall, cpu, peak = _child(command)
+            print(f"  run {k + 1}: {wall:6.2f} s wall, {cpu:6.2f} s CPU, peak RSS (largest child so far) "
+                  f"{peak:5.0f} MB, load {os.getloadavg()[0]:.2f}")
 
 
 def main():
@@ -22,15 +65,23 @@ def main():
     parser.add_argument("--engine", default="blocks", choices=("blocks", "frames"))
     parser.add_argument("--duration", type=float, default=10.0, help="minutes")
     parser.add_argument("--mode", default="tiled", choices=("tiled", "full-disk"))
+    parser.add_argument("--sun", default=None, choices=("milne-eddington", "model-atmosphere"),
+                        help="the built-in Sun (default: the mode's)")
+    parser.add_argument("--process", type=int, default=0, metavar="N",
+                        help="time N whole 'gongsynth simulate' processes instead")
     args = parser.parse_args()
+    if args.process:
+        processes(args)
+        return
 
     start = time.perf_counter()
-    result = gongsynth.simulate(seed=1, detector_shape=args.shape, engine=args.engine,
+    result = gongsynth.simulate(seed=1, detector_shape=args.shape, engine=args.engine, sun=args.sun,
                                 duration=args.duration * u.min, mode=args.mode, progress=False)
     total = time.perf_counter() - start
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"gongsynth {gongsynth.__version__}: {args.mode}, detector "
-          f"{result.magnetogram.data.shape[0]} px, {args.duration:g} min, engine {args.engine}")
+          f"{result.magnetogram.data.shape[0]} px, {args.duration:g} min, engine {args.engine}, "
+          f"sun {result.config.sun}")
     for stage, seconds in result.timings.items():
         print(f"  {stage:<16s} {seconds:7.2f} s")
     print(f"  {'total':<16s} {total:7.2f} s   (import and set-up included: "
