@@ -117,9 +117,17 @@ def _next(st, lane):
 
 
 @njit(inline="always")
-def _uniform(st, lane):
-    """Uniform double in the open interval (0, 1), on a 2**-52 grid."""
-    return (np.float64(_next(st, lane) >> _U(12)) + 0.5) * _TO_UNIT52
+def _draw(s):
+    """(next 64-bit output, next state) of the state tuple ``s``."""
+    r, s0, s1, s2, s3 = _step(s[0], s[1], s[2], s[3])
+    return r, (s0, s1, s2, s3)
+
+
+@njit(inline="always")
+def _uniform(s):
+    """(uniform double in the open interval (0, 1) on a 2**-52 grid, next state)."""
+    r, s = _draw(s)
+    return (np.float64(r >> _U(12)) + 0.5) * _TO_UNIT52, s
 
 
 def _ziggurat_constants(n):
@@ -141,10 +149,10 @@ def _ziggurat_constants(n):
     return lo, excess(lo)[1]
 
 
-def _ziggurat_tables(n):
-    """Marsaglia & Tsang (2000) tables for the n-layer normal ziggurat on 52-bit integers."""
+def _ziggurat_tables(n, bits):
+    """Marsaglia & Tsang (2000) tables for the n-layer normal ziggurat on ``bits``-bit abscissae."""
     r, v = _ziggurat_constants(n)
-    m = 2.0**52
+    m = 2.0**bits
     k = np.zeros(n, np.uint64)
     w = np.zeros(n)
     f = np.zeros(n)
@@ -167,9 +175,19 @@ def _ziggurat_tables(n):
 
 # 1024 layers: 0.43 % of draws fall outside their layer's rectangle (2.8 % with 128).
 _ZBITS = 10
-_ZK, _ZW, _ZF, _ZR = _ziggurat_tables(1 << _ZBITS)
+_ZABS = 48
+_ZK, _ZW, _ZF, _ZR = _ziggurat_tables(1 << _ZBITS, _ZABS)
 _ZLAYER = _U((1 << _ZBITS) - 1)
-_ZMASK = _U(0xFFFFFFFFFFFFF)  # 52 bits
+_ZMASK = _U((1 << _ZABS) - 1)
+# Bits of a draw above layer, sign and abscissa: PD's coarse uniform takes them from r1 and r2.
+_SPARE = 64 - _ZBITS - 1 - _ZABS
+_COARSE = 2 * _SPARE
+_TO_COARSE = 1.0 / (1 << _COARSE)
+# Lowest set bit of a 64-bit word by de Bruijn multiplication.
+_DEBRUIJN = _U(0x03F79D71B4CB0A89)
+_DEBRUIJN_INDEX = np.zeros(64, np.int64)
+for _b in range(64):
+    _DEBRUIJN_INDEX[((1 << _b) * 0x03F79D71B4CB0A89 % 2**64) >> 58] = _b
 
 
 @njit(inline="always")
@@ -183,26 +201,28 @@ def _rectangle(r):
 
 
 @njit(cache=True)
-def _normal(st, lane, r):
-    """Standard normal variate from draw ``r``, continuing stream ``lane`` if it needs more."""
+def _normal(s, r):
+    """(standard normal variate from draw ``r``, state): continues state ``s`` if ``r`` is not enough."""
     while True:
         i = np.int64(r & _ZLAYER)
         sign = (r >> _U(_ZBITS)) & _U(1)
         j = (r >> _U(_ZBITS + 1)) & _ZMASK
         x = np.float64(j) * _ZW[i]
         if j < _ZK[i]:
-            return -x if sign else x
+            return (-x if sign else x), s
         if i == 0:
             # Tail beyond r (Marsaglia 1964).
             while True:
-                xt = -math.log(_uniform(st, lane)) / _ZR
-                yt = -math.log(_uniform(st, lane))
-                if yt + yt >= xt * xt:
+                a, s = _uniform(s)
+                b, s = _uniform(s)
+                xt = -math.log(a) / _ZR
+                if -2.0 * math.log(b) >= xt * xt:
                     break
-            return -(_ZR + xt) if sign else _ZR + xt
-        if _ZF[i] + _uniform(st, lane) * (_ZF[i - 1] - _ZF[i]) < math.exp(-0.5 * x * x):
-            return -x if sign else x
-        r = _next(st, lane)
+            return (-(_ZR + xt) if sign else _ZR + xt), s
+        a, s = _uniform(s)
+        if _ZF[i] + a * (_ZF[i - 1] - _ZF[i]) < math.exp(-0.5 * x * x):
+            return (-x if sign else x), s
+        r, s = _draw(s)
 
 
 @njit(inline="always")
@@ -274,168 +294,189 @@ def _poisson_constants(lam, c, p, lane, cdf, guide, slot):
 
 
 @njit(inline="always")
-def _pk_fk(c, p, lane, k):
-    """Poisson probability p_k and discrete-normal probability f_k (algorithm PD)."""
-    lam = c[_LAM, p, lane]
-    pk = math.exp(-lam + k * c[_LOGLAM, p, lane] - _log_factorial(k))
-    x = (k + 0.5 - lam) / c[_SLAM, p, lane]
+def _pk_fk(q, k):
+    """Poisson probability p_k and discrete-normal probability f_k (algorithm PD; constants ``q``)."""
+    lam = q[_LAM]
+    pk = math.exp(-lam + k * q[_LOGLAM] - _log_factorial(k))
+    x = (k + 0.5 - lam) / q[_SLAM]
     x *= x
-    fk = c[_OMEGA, p, lane] * math.exp(-0.5 * x) * (
-        ((c[_C3, p, lane] * x + c[_C2, p, lane]) * x + c[_C1, p, lane]) * x + c[_C0, p, lane])
+    fk = q[_OMEGA] * math.exp(-0.5 * x) * (((q[_C3] * x + q[_C2]) * x + q[_C1]) * x + q[_C0])
     return pk, fk
 
 
-@njit(inline="always")
-def _unit(r):
-    """Uniform double in (0, 1) from the top 52 bits of draw ``r``."""
-    return (np.float64(r >> _U(12)) + 0.5) * _TO_UNIT52
-
-
 @njit(cache=True)
-def _pd_rest(st, lane, c, p, g, u):
-    """Steps Q, E and H of algorithm PD (< 3 % of draws at λ ≥ 30)."""
-    lam = c[_LAM, p, lane]
+def _pd_rest(s, q, g, u):
+    """(variate, state): steps Q, E and H of algorithm PD (< 3 % of draws at λ ≥ 30)."""
     if g >= 0.0:
         # Step Q: accept with probability p_k / f_k (u is reused, as in PD).
         k = np.floor(g)
-        pk, fk = _pk_fk(c, p, lane, k)
+        pk, fk = _pk_fk(q, k)
         if (1.0 - u) * fk <= pk:
-            return k
+            return k, s
     # Steps E and H: double-exponential hat for the excess p_k − f_k.
     while True:
-        e = -math.log(_uniform(st, lane))
-        v = 2.0 * _uniform(st, lane) - 1.0
+        a, s = _uniform(s)
+        b, s = _uniform(s)
+        e = -math.log(a)
+        v = 2.0 * b - 1.0
         t = 1.8 + e if v >= 0.0 else 1.8 - e
         if t > -0.6744:
-            k = np.floor(lam + c[_SLAM, p, lane] * t)
-            pk, fk = _pk_fk(c, p, lane, k)
-            if c[_CHAT, p, lane] * abs(v) <= (pk - fk) * math.exp(e):
-                return k
+            k = np.floor(q[_LAM] + q[_SLAM] * t)
+            pk, fk = _pk_fk(q, k)
+            if q[_CHAT] * abs(v) <= (pk - fk) * math.exp(e):
+                return k, s
+
+
+@njit(inline="always")
+def _coarse(r1, r2):
+    """PD's coarse uniform bits: the spare top bits of r1, then of r2 (an integer < 2**_COARSE)."""
+    return ((r1 >> _U(64 - _SPARE)) << _U(_SPARE)) | (r2 >> _U(64 - _SPARE))
+
+
+@njit(inline="always")
+def _fine(coarse, r):
+    """52-bit uniform in (0, 1) whose top bits are ``coarse``, the rest from draw ``r``."""
+    return (np.float64((coarse << _U(52 - _COARSE)) | (r >> _U(12 + _COARSE))) + 0.5) * _TO_UNIT52
 
 
 @njit(cache=True)
-def _complete(st, lane, r1, r2, r3, c, p, cdf, guide, photon):
+def _complete_pd(s, r1, r2, q, photon):
     """
-    (electrons, read-noise normal) of one pixel-frame from its three draws, by the whole algorithm.
+    (electrons, read-noise normal, state) of one pixel-frame from its two draws, by the whole algorithm.
 
-    Further draws continue the pixel's stream in a fixed order: the rest of
-    z1 (PD means only), of z2, then PD's steps E and H.
+    ``q`` holds the pixel's constants (`_poisson_constants`; a mean that PD
+    serves, or any mean if not ``photon``).  Further draws continue state
+    ``s`` in a fixed order: the rest of z1, of z2, then the fine bits of the
+    uniform and PD's steps E and H.
     """
-    lam = c[_LAM, p, lane]
+    lam = q[_LAM]
     if not photon:
-        return lam, _normal(st, lane, r2)
-    u = _unit(r3)
-    m = c[_M, p, lane]
-    if m > 0.0:
-        z2 = _normal(st, lane, r2)
-        # Inversion: the smallest k with cdf[k] >= u, searched from the guide entry.
-        slot = np.int64(c[_SLOT, p, lane])
-        k = guide[slot, min(np.int64(u * m), np.int64(m) - 1)]
-        while cdf[slot, k] < u:
-            k += 1
-        return np.float64(k), z2
-    z1 = _normal(st, lane, r1)
-    z2 = _normal(st, lane, r2)
-    # Step N: normal sample; steps I and S: immediate and squeeze acceptance.
-    g = lam + c[_SLAM, p, lane] * z1
+        z2, s = _normal(s, r2)
+        return lam, z2, s
+    z1, s = _normal(s, r1)
+    z2, s = _normal(s, r2)
+    # Step N: normal sample; steps I and S: immediate and squeeze acceptance, first
+    # on the coarse uniform (a lower bound of u), then on the whole one.
+    coarse = _coarse(r1, r2)
+    g = lam + q[_SLAM] * z1
     k = np.floor(g)
     diff = lam - k
-    if (g >= 0.0) & ((k >= c[_BIGL, p, lane]) | (c[_D, p, lane] * u >= diff * diff * diff)):
-        return k, z2
-    return _pd_rest(st, lane, c, p, g, u), z2
+    cube = diff * diff * diff
+    if (g >= 0.0) & ((k >= q[_BIGL]) | (q[_D] * (np.float64(coarse) * _TO_COARSE) >= cube)):
+        return k, z2, s
+    r, s = _draw(s)
+    u = _fine(coarse, r)
+    if (g >= 0.0) & (q[_D] * u >= cube):
+        return k, z2, s
+    k, s = _pd_rest(s, q, g, u)
+    return k, z2, s
 
 
-@njit(inline="always")
-def _fast_pass(st, c, p, photon, draws, n_out, z_out, flag):
+@njit(cache=True, error_model="numpy")
+def _run_block(lam, i0, lanes, seg_start, seg_snap, plane, inv_gain, sigma, photon, key0, key1, first,
+               reference, acc, record):
     """
-    One frame of a block: three draws per pixel and the common path of every sampler.
+    Every frame of the block of pixels ``i0 .. i0 + lanes - 1`` of a chunk.
 
-    Writes the draws, the electrons and read-noise normal of each pixel and
-    whether `_complete` must redo it (``flag``, one byte per pixel); returns
-    the number of such pixels.  Branch-free, so that it vectorises across the
-    block.
+    Adds each frame's ADU, round(n / g + σ z), to ``acc`` (n_planes, LANES).
+    ``record`` (n_frames, 2, LANES), unless empty, receives each frame's
+    electrons n and read-noise normal z.  Lanes past ``lanes`` draw from
+    streams of their own (mean 0) and are dropped by the caller.  The frame
+    loop is written out here, with no array passed to a function inside it:
+    numba's reference counting of array arguments would cost more than the
+    samplers.
     """
-    lam = c[_LAM, p]
-    slam = c[_SLAM, p]
-    bigl = c[_BIGL, p]
-    dd = c[_D, p]
-    bad = 0
-    for lane in range(st.shape[1]):
-        # The state stays in registers for the three draws.
-        r1, s0, s1, s2, s3 = _step(st[0, lane], st[1, lane], st[2, lane], st[3, lane])
-        r2, s0, s1, s2, s3 = _step(s0, s1, s2, s3)
-        r3, s0, s1, s2, s3 = _step(s0, s1, s2, s3)
-        st[0, lane] = s0
-        st[1, lane] = s1
-        st[2, lane] = s2
-        st[3, lane] = s3
-        ok1, z1 = _rectangle(r1)
-        ok2, z2 = _rectangle(r2)
-        g = lam[lane] + slam[lane] * z1
-        k = np.floor(g)
-        diff = lam[lane] - k
-        u = _unit(r3)
-        accept = ok1 & (g >= 0.0) & ((k >= bigl[lane]) | (dd[lane] * u >= diff * diff * diff))
-        accept = accept if photon else True
-        draws[0, lane] = r1
-        draws[1, lane] = r2
-        draws[2, lane] = r3
-        n_out[lane] = k if photon else lam[lane]
-        z_out[lane] = z2
-        f = np.uint8(not (accept & ok2))
-        flag[lane] = f
-        bad += f
-    return bad
-
-
-@njit(inline="always")
-def _frame(st, c, p, cdf, guide, photon, reference, draws, n_out, z_out, flag):
-    """Electrons and read-noise normal of one frame of a block into ``n_out``, ``z_out``."""
-    if reference:
-        for lane in range(st.shape[1]):
-            r1 = _next(st, lane)
-            r2 = _next(st, lane)
-            r3 = _next(st, lane)
-            n_out[lane], z_out[lane] = _complete(st, lane, r1, r2, r3, c, p, cdf, guide, photon)
-        return
-    if _fast_pass(st, c, p, photon, draws, n_out, z_out, flag):
-        # Eight flags per word: skip the (mostly clean) words at once.
-        words = flag.view(np.uint64)
-        for w in range(words.size):
-            if words[w]:
-                for lane in range(8 * w, 8 * w + 8):
-                    if flag[lane]:
-                        n_out[lane], z_out[lane] = _complete(st, lane, draws[0, lane], draws[1, lane],
-                                                             draws[2, lane], c, p, cdf, guide, photon)
-
-
-@njit(inline="always")
-def _block_start(key0, key1, first, n_planes):
-    """Seeded states and the work arrays of one block starting at detector index ``first``."""
+    n_planes = lam.shape[1]
     st = np.empty((4, LANES), np.uint64)
     for lane in range(LANES):
-        _seed(st, lane, key0, key1, _U(first + lane))
-    return (st, np.zeros((N_CONST, n_planes, LANES)), np.empty((3, LANES), np.uint64),
-            np.empty(LANES), np.empty(LANES), np.zeros(LANES, np.uint8))
-
-
-@njit(inline="always")
-def _block_means(means, c, p, lanes, cdf, guide, used):
-    """Constants of the block's ``means`` (first ``lanes`` real, the rest 0) in plane ``p``."""
-    for lane in range(LANES):
-        mean = means[lane] if lane < lanes else 0.0
-        _poisson_constants(mean, c, p, lane, cdf, guide, used)
-        if c[_M, p, lane] > 0.0:
-            used += 1
-    return used
-
-
-@njit(inline="always")
-def _count_small(means, lanes):
-    n = 0
-    for lane in range(lanes):
-        n += (means[lane] > 0.0) & (means[lane] < PD_MIN_LAM)
-    return n
+        _seed(st, lane, key0, key1, _U(first + i0 + lane))
+    c = np.zeros((N_CONST, n_planes, LANES))
+    draws = np.empty((2, LANES), np.uint64)
+    n_out = np.empty(LANES)
+    z_out = np.empty(LANES)
+    keep = record.shape[0] > 0
+    for j in range(seg_snap.size):
+        snap = seg_snap[j]
+        small = 0
+        for p in range(n_planes):
+            for lane in range(lanes):
+                small += (lam[snap, p, i0 + lane] > 0.0) & (lam[snap, p, i0 + lane] < PD_MIN_LAM)
+        cdf = np.empty((small, TABLE_LEN))
+        guide = np.empty((small, TABLE_LEN), np.int32)
+        slot = 0
+        for p in range(n_planes):
+            for lane in range(LANES):
+                _poisson_constants(lam[snap, p, i0 + lane] if lane < lanes else 0.0, c, p, lane, cdf, guide,
+                                   slot)
+                slot += c[_M, p, lane] > 0.0
+        for k in range(seg_start[j], seg_start[j + 1]):
+            p = plane[k]
+            mask = _U(0)
+            if reference:
+                mask = ~mask
+                for lane in range(LANES):
+                    r1, s0, s1, s2, s3 = _step(st[0, lane], st[1, lane], st[2, lane], st[3, lane])
+                    r2, s0, s1, s2, s3 = _step(s0, s1, s2, s3)
+                    st[0, lane], st[1, lane], st[2, lane], st[3, lane] = s0, s1, s2, s3
+                    draws[0, lane] = r1
+                    draws[1, lane] = r2
+            else:
+                # The common path of every sampler, branch-free so that it vectorises
+                # across the block; the pixels it cannot finish are marked in ``mask``.
+                for lane in range(LANES):
+                    r1, s0, s1, s2, s3 = _step(st[0, lane], st[1, lane], st[2, lane], st[3, lane])
+                    r2, s0, s1, s2, s3 = _step(s0, s1, s2, s3)
+                    st[0, lane], st[1, lane], st[2, lane], st[3, lane] = s0, s1, s2, s3
+                    ok1, z1 = _rectangle(r1)
+                    ok2, z2 = _rectangle(r2)
+                    mean = c[_LAM, p, lane]
+                    g = mean + c[_SLAM, p, lane] * z1
+                    n = np.floor(g)
+                    diff = mean - n
+                    u = np.float64(_coarse(r1, r2)) * _TO_COARSE
+                    accept = ok1 & (g >= 0.0) & ((n >= c[_BIGL, p, lane])
+                                                 | (c[_D, p, lane] * u >= diff * diff * diff))
+                    accept = (accept if photon else True) & ok2
+                    n = n if photon else mean
+                    draws[0, lane] = r1
+                    draws[1, lane] = r2
+                    n_out[lane] = n
+                    z_out[lane] = z2
+                    adu = np.int64(math.floor(n * inv_gain + sigma * z2 + 0.5))
+                    acc[p, lane] += adu if accept else 0
+                    mask |= _U(0 if accept else 1) << _U(lane)
+            # The rest: the whole algorithm, continuing each pixel's stream.
+            while mask:
+                low = mask & (~mask + _U(1))
+                lane = _DEBRUIJN_INDEX[(low * _DEBRUIJN) >> _U(58)]
+                mask ^= low
+                s = (st[0, lane], st[1, lane], st[2, lane], st[3, lane])
+                r1 = draws[0, lane]
+                r2 = draws[1, lane]
+                m = c[_M, p, lane]
+                if photon and m > 0.0:
+                    # Inversion: the smallest n with cdf[n] >= u, searched from the guide entry.
+                    z, s = _normal(s, r2)
+                    r, s = _draw(s)
+                    u = _fine(_coarse(r1, r2), r)
+                    row = np.int64(c[_SLOT, p, lane])
+                    i = guide[row, min(np.int64(u * m), np.int64(m) - 1)]
+                    while cdf[row, i] < u:
+                        i += 1
+                    n = np.float64(i)
+                else:
+                    q = (c[0, p, lane], c[1, p, lane], c[2, p, lane], c[3, p, lane], c[4, p, lane],
+                         c[5, p, lane], c[6, p, lane], c[7, p, lane], c[8, p, lane], c[9, p, lane],
+                         c[10, p, lane])
+                    n, z, s = _complete_pd(s, r1, r2, q, photon)
+                st[0, lane], st[1, lane], st[2, lane], st[3, lane] = s
+                n_out[lane] = n
+                z_out[lane] = z
+                acc[p, lane] += np.int64(math.floor(n * inv_gain + sigma * z + 0.5))
+            if keep:
+                for lane in range(LANES):
+                    record[k, 0, lane] = n_out[lane]
+                    record[k, 1, lane] = z_out[lane]
 
 
 @njit(parallel=True, cache=True, error_model="numpy")
@@ -474,26 +515,13 @@ def frames_kernel(lam, seg_start, seg_snap, plane, dither, inv_gain, sigma, phot
     dither_sum = np.zeros(n_planes, np.int64)
     for k in range(plane.size):
         dither_sum[plane[k]] += dither[k]
+    none = np.empty((0, 2, LANES))
     for b in prange((n_pix + LANES - 1) // LANES):
         i0 = b * LANES
         lanes = min(LANES, n_pix - i0)
-        st, c, draws, n_out, z_out, flag = _block_start(key0, key1, first + i0, n_planes)
         acc = np.zeros((n_planes, LANES), np.int64)
-        for j in range(seg_snap.size):
-            snap = seg_snap[j]
-            small = 0
-            for p in range(n_planes):
-                small += _count_small(lam[snap, p, i0:i0 + lanes], lanes)
-            cdf = np.empty((small, TABLE_LEN))
-            guide = np.empty((small, TABLE_LEN), np.int32)
-            used = 0
-            for p in range(n_planes):
-                used = _block_means(lam[snap, p, i0:i0 + lanes], c, p, lanes, cdf, guide, used)
-            for k in range(seg_start[j], seg_start[j + 1]):
-                p = plane[k]
-                _frame(st, c, p, cdf, guide, photon, False, draws, n_out, z_out, flag)
-                for lane in range(LANES):
-                    acc[p, lane] += np.int64(math.floor(n_out[lane] * inv_gain + sigma * z_out[lane] + 0.5))
+        _run_block(lam, i0, lanes, seg_start, seg_snap, plane, inv_gain, sigma, photon, key0, key1, first,
+                   False, acc, none)
         for p in range(n_planes):
             for lane in range(lanes):
                 out[p, i0 + lane] = acc[p, lane] + dither_sum[p]
@@ -516,8 +544,8 @@ def sample_kernel(lam, n_frames, key0, key1, first, photon=True, reference=False
     photon : bool
         As in `frames_kernel`.
     reference : bool
-        Run the whole algorithm (`_complete`) for every pixel-frame instead of
-        the vectorised common path: the results must be the same bits.
+        Run the whole algorithm for every pixel-frame instead of the
+        vectorised common path: the results must be the same bits.
 
     Returns
     -------
@@ -525,19 +553,20 @@ def sample_kernel(lam, n_frames, key0, key1, first, photon=True, reference=False
         Poisson variates (λ itself if not ``photon``) and read-noise normal variates.
     """
     n_pix = lam.size
+    means = lam.reshape(1, 1, n_pix)
+    seg_start = np.array([0, n_frames], np.int64)
+    seg_snap = np.zeros(1, np.int64)
+    plane = np.zeros(n_frames, np.int64)
     electrons = np.empty((n_frames, n_pix))
     normal = np.empty((n_frames, n_pix))
     for b in prange((n_pix + LANES - 1) // LANES):
         i0 = b * LANES
         lanes = min(LANES, n_pix - i0)
-        st, c, draws, n_out, z_out, flag = _block_start(key0, key1, first + i0, 1)
-        small = _count_small(lam[i0:i0 + lanes], lanes)
-        cdf = np.empty((small, TABLE_LEN))
-        guide = np.empty((small, TABLE_LEN), np.int32)
-        _block_means(lam[i0:i0 + lanes], c, 0, lanes, cdf, guide, 0)
+        record = np.empty((n_frames, 2, LANES))
+        _run_block(means, i0, lanes, seg_start, seg_snap, plane, 1.0, 0.0, photon, key0, key1, first,
+                   reference, np.zeros((1, LANES), np.int64), record)
         for k in range(n_frames):
-            _frame(st, c, 0, cdf, guide, photon, reference, draws, n_out, z_out, flag)
             for lane in range(lanes):
-                electrons[k, i0 + lane] = n_out[lane]
-                normal[k, i0 + lane] = z_out[lane]
+                electrons[k, i0 + lane] = record[k, 0, lane]
+                normal[k, i0 + lane] = record[k, 1, lane]
     return electrons, normal
