@@ -9,38 +9,41 @@ block or thread processes it.
 
 Pixels are processed in blocks of `LANES`, frame by frame, with the block's
 states in structure-of-arrays form so that the common path vectorises across
-pixels (`_fast_pass`).  Each frame draws two 64-bit numbers per pixel, r1 and
-r2; a pixel whose draws leave the common path (a ziggurat draw outside its
-layer's rectangle, a Poisson draw that needs more than PD's steps I and S, or
-a mean that uses inversion) is finished by `_complete`, the whole algorithm,
-which continues from the same two draws on the same stream.
+pixels (AVX-512 where the CPU has it).  Each frame draws two 64-bit numbers
+per pixel, r1 and r2.  A pixel whose draws leave the common path (a ziggurat
+draw outside its layer's rectangle, a Poisson draw that PD's steps I and S do
+not settle on the coarse uniform, or a mean below `PD_MIN_LAM`; about 1 % of
+pixel-frames at λ ≥ 1e4) is redone by the whole algorithm, which continues
+from the same two draws on the same stream, right after them.
 
 Samplers:
 
-* Normal: Marsaglia & Tsang's 128-layer ziggurat (2000) on one 64-bit draw
-  (layer: bits 0-6, sign: bit 7, 52-bit abscissa: bits 8-59), exact wedges
-  and tail.  z1 (Poisson) comes from r1, z2 (read noise) from r2.
+* Normal: Marsaglia & Tsang's ziggurat (2000) with 1024 layers on one 64-bit
+  draw (layer: bits 0-9, sign: bit 10, 48-bit abscissa: bits 11-58), exact
+  wedges and tail; 0.43 % of draws fall outside their layer's rectangle.
+  z1 (Poisson) comes from r1, z2 (read noise) from r2.
 * Poisson, mean λ ≥ `PD_MIN_LAM` (and λ = 0): Ahrens & Dieter's algorithm PD
   (1982, ACM TOMS 8, 163; the one R uses): g = λ + √λ z1, k = ⌊g⌋ is accepted
   at once if k ≥ L (step I) or after the cubic squeeze 6λ²u ≥ (λ − k)³ (step
   S); the rest is corrected exactly against the Poisson probabilities (steps
   Q, E, H; log k! by its Stirling series, |error| < 1e-12).  PD's uniform u
-  has 52 bits: the top 8 are bits 60-63 of r1 and r2 (unused by the
-  ziggurat), the low 44 come from one more draw taken only when the top 8 do
-  not decide step S.  Since u ≥ u8/256, D·u8/256 ≥ (λ − k)³ implies
+  has 52 bits: the top 10 are bits 59-63 of r1 and of r2 (unused by the
+  ziggurat), the low 42 come from one more draw taken only when the top 10
+  do not settle step S.  Since u ≥ u10/1024, D·u10/1024 ≥ (λ − k)³ implies
   D·u ≥ (λ − k)³ in floating point too (rounding is monotone), so the
-  decision is the one the full uniform would give: the variate is exactly
+  decision is the one the whole uniform would give: every variate is exactly
   PD's with a 52-bit uniform.
 * Poisson, 0 < λ < `PD_MIN_LAM`: inversion of the cumulative distribution
   tabulated up to λ + 10√λ + 10 (the tail beyond holds < 1e-19 and is
-  renormalised away), searched from a guide table, with u from r1.
+  renormalised away), searched from a guide table, with a 52-bit uniform
+  (top 10 bits from r1 and r2, the rest from one more draw).
 """
 import math
 
 import numpy as np
 from numba import njit, prange
 
-__all__ = ["frames_kernel", "sample_kernel", "LANES", "PD_MIN_LAM"]
+__all__ = ["frames_kernel", "sample_kernel", "LANES", "PD_MIN_LAM", "ZIGGURAT_R"]
 
 _U = np.uint64
 _GOLDEN = _U(0x9E3779B97F4A7C15)
@@ -177,6 +180,8 @@ def _ziggurat_tables(n, bits):
 _ZBITS = 10
 _ZABS = 48
 _ZK, _ZW, _ZF, _ZR = _ziggurat_tables(1 << _ZBITS, _ZABS)
+#: Edge of the ziggurat's base strip: normal variates beyond it come from the exact tail.
+ZIGGURAT_R = _ZR
 _ZLAYER = _U((1 << _ZBITS) - 1)
 _ZMASK = _U((1 << _ZABS) - 1)
 # Bits of a draw above layer, sign and abscissa: PD's coarse uniform takes them from r1 and r2.
@@ -200,7 +205,7 @@ def _rectangle(r):
     return j < _ZK[i], x
 
 
-@njit(cache=True)
+@njit(inline="always")
 def _normal(s, r):
     """(standard normal variate from draw ``r``, state): continues state ``s`` if ``r`` is not enough."""
     while True:
@@ -304,7 +309,7 @@ def _pk_fk(q, k):
     return pk, fk
 
 
-@njit(cache=True)
+@njit(inline="always")
 def _pd_rest(s, q, g, u):
     """(variate, state): steps Q, E and H of algorithm PD (< 3 % of draws at λ ≥ 30)."""
     if g >= 0.0:
