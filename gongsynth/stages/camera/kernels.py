@@ -99,27 +99,6 @@ def _step(s0, s1, s2, s3):
 
 
 @njit(inline="always")
-def _next(st, lane):
-    """Next 64-bit output of the stream in ``st[:, lane]``."""
-    s0 = st[0, lane]
-    s1 = st[1, lane]
-    s2 = st[2, lane]
-    s3 = st[3, lane]
-    result = _rotl(s1 * _U(5), 7) * _U(9)
-    t = s1 << _U(17)
-    s2 ^= s0
-    s3 ^= s1
-    s1 ^= s2
-    s0 ^= s3
-    s2 ^= t
-    st[0, lane] = s0
-    st[1, lane] = s1
-    st[2, lane] = s2
-    st[3, lane] = _rotl(s3, 45)
-    return result
-
-
-@njit(inline="always")
 def _draw(s):
     """(next 64-bit output, next state) of the state tuple ``s``."""
     r, s0, s1, s2, s3 = _step(s[0], s[1], s[2], s[3])
@@ -248,7 +227,7 @@ def _poisson_constants(lam, c, p, lane, cdf, guide, slot):
 
     A mean below `PD_MIN_LAM` gets its cumulative distribution in ``cdf[slot]``
     and guide table in ``guide[slot]``; its L and D are NaN so that the
-    common path (`_fast_pass`) always leaves it to `_complete`.  λ = 0 runs
+    common path of `_run_block` always leaves it to the whole algorithm.  λ = 0 runs
     through PD's constants, which give 0 on the common path.
     """
     c[_LAM, p, lane] = lam
