@@ -291,20 +291,18 @@ def test_planes_without_frames_hold_zero():
     assert np.all(raw.data[3:] == 0)
 
 
-# Tabulated inversion up to λ = 500, algorithm PD above; PD is also forced at small
-# means (table_max=0), where its rarely used correction steps (Q, E, H) do most work.
-@pytest.mark.parametrize("lam, table_max", [
-    (0.5, 500), (7.0, 500), (40.0, 500), (499.0, 500), (501.0, 500), (1e3, 500), (5e4, 500),
-    (3e5, 500), (10.0, 0), (14.0, 0), (40.0, 0), (200.0, 0),
-])
-def test_poisson_sampler_matches_the_poisson_distribution(lam, table_max):
+# Inversion below λ = 10, algorithm PD from 10 up (its correction steps Q, E, H do most
+# work at small λ); every draw through the frames engine's own block loop, 2000 pixels
+# × 100 frames, so that serial draws of one stream and parallel streams are both tested.
+@pytest.mark.parametrize("lam", [0.5, 7.0, 9.99, 10.0, 14.0, 40.0, 200.0, 499.0, 501.0, 1e3, 5e4, 3e5])
+def test_poisson_sampler_matches_the_poisson_distribution(lam):
     from scipy import stats
 
-    from gongsynth.stages.camera.kernels import poisson_kernel
+    from gongsynth.stages.camera.kernels import sample_kernel
 
-    n = 200_000
-    x = poisson_kernel(np.full(n, lam), np.uint64(2024), np.uint64(7), np.uint64(int(lam * 10)),
-                       float(table_max))
+    x, _ = sample_kernel(np.full(2000, lam), 100, np.uint64(2024), np.uint64(7), int(lam * 10))
+    x = x.ravel()
+    n = x.size
     assert np.all(x == np.round(x)) and x.min() >= 0
     # Chi-square over ~40 bins of equal probability.
     edges = np.unique(stats.poisson.ppf(np.linspace(0, 1, 42)[1:-1], lam))
@@ -313,16 +311,41 @@ def test_poisson_sampler_matches_the_poisson_distribution(lam, table_max):
     chi2 = ((observed - n * probs) ** 2 / (n * probs)).sum()
     assert stats.chi2.sf(chi2, edges.size) > 1e-3
     assert abs(x.mean() - lam) < 4 * np.sqrt(lam / n)
+    assert abs(x.var() / lam - 1) < 4 * np.sqrt(2 / n)
 
 
 def test_normal_sampler_including_the_ziggurat_tail():
     from scipy import stats
 
-    from gongsynth.stages.camera.kernels import normal_kernel
+    from gongsynth.stages.camera.kernels import ZIGGURAT_R, sample_kernel
 
-    z = normal_kernel(1_000_000, np.uint64(99), np.uint64(1), np.uint64(5))
+    n, z = sample_kernel(np.zeros(5000), 200, np.uint64(99), np.uint64(1), 5, photon=False)
+    assert np.all(n == 0)
+    z = z.ravel()
     assert stats.kstest(z, "norm").pvalue > 1e-3
-    tail = 2 * stats.norm.sf(3.442619855899)  # beyond the base strip: the exact-tail branch
-    count = np.count_nonzero(np.abs(z) > 3.442619855899)
+    tail = 2 * stats.norm.sf(ZIGGURAT_R)  # beyond the base strip: the exact-tail branch
+    count = np.count_nonzero(np.abs(z) > ZIGGURAT_R)
     assert abs(count - tail * z.size) < 4 * np.sqrt(tail * z.size)
     assert abs(np.mean(z**4) - 3) < 4 * np.sqrt(96 / z.size)
+    # Successive frames of one stream are independent.
+    frames = z.reshape(200, 5000)
+    r = np.corrcoef(frames[:-1].ravel(), frames[1:].ravel())[0, 1]
+    assert abs(r) < 4 / np.sqrt(frames[1:].size)
+
+
+@pytest.mark.parametrize("photon", [True, False])
+def test_vectorised_path_equals_the_whole_algorithm(photon):
+    # The block loop finishes most pixel-frames on a branch-free common path and
+    # leaves the rest to the whole algorithm; both must give the same bits.
+    from gongsynth.stages.camera.kernels import LANES, sample_kernel
+
+    means = np.array([0.0, 0.5, 3.0, 9.99, 10.0, 30.0, 300.0, 499.0, 501.0, 2e4, 1e5, 3e5])
+    lam = np.resize(means, 3 * LANES + 5)  # partial last block, every mean in many lanes
+    fast = sample_kernel(lam, 300, np.uint64(3), np.uint64(4), 11, photon=photon)
+    whole = sample_kernel(lam, 300, np.uint64(3), np.uint64(4), 11, photon=photon, reference=True)
+    np.testing.assert_array_equal(fast[0], whole[0])
+    np.testing.assert_array_equal(fast[1], whole[1])
+    # A pixel's numbers depend on its detector index only, not on its block.
+    shifted = sample_kernel(lam[7:], 300, np.uint64(3), np.uint64(4), 18, photon=photon)
+    np.testing.assert_array_equal(shifted[0], fast[0][:, 7:])
+    np.testing.assert_array_equal(shifted[1], fast[1][:, 7:])
