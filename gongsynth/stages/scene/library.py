@@ -13,13 +13,16 @@ and viewing angle and keeps only what the channels need:
   more unipolar network: its ``network_flux_density`` and
   ``network_polarity`` knobs, no sunspot), then uniform strong-field columns
   standing for pores, penumbrae and umbrae (`STRONG_FIELDS`);
-- each level's patches (one or more seeds) are synthesised
-  (`gongsynth.sun.photosphere.synthesize`, Milne-Eddington) at the viewing
-  angles ``theta`` (observer toward the patch's +x: azimuth 0) and every
-  spectrum is stored as its continuum and its coordinates in the Doppler
-  basis of `gongsynth.stages.scene.shifts` (per polarisation state, after the
-  instrument's Mueller matrix), divided by the continuum limb darkening at
-  that angle, with the true B·n;
+- each level's patches (one or more seeds) are synthesised (Milne-Eddington)
+  at the viewing angles ``theta`` (observer toward the patch's +x: azimuth 0)
+  and every spectrum is stored as its continuum and its coordinates in the
+  Doppler basis of `gongsynth.stages.scene.shifts` (per polarisation state,
+  after the instrument's Mueller matrix), divided by the continuum limb
+  darkening at that angle, with the true B·n.  Both are linear in the
+  spectrum, so the synthesis contracts each column's spectra with them at
+  once (`gongsynth.sun.photosphere.DeferredStokes.project`) and no spectrum
+  is stored: the same numbers as synthesising the float32 cubes and
+  projecting them, to their float32 rounding;
 - `gongsynth.stages.scene.fulldisk` places the patches on the sphere and
   interpolates between the angles and levels.
 
@@ -41,7 +44,13 @@ from gongsynth.instrument import resolve_instrument
 from gongsynth.seeding import as_seed_sequence, child_sequence
 from gongsynth.stages.channels import analyser_coefficients
 from gongsynth.stages.scene.shifts import ShiftBasis, shift_basis
-from gongsynth.sun.photosphere import NiLine, Photosphere, default_wavelength, model_photosphere, synthesize
+from gongsynth.sun.photosphere import (
+    DeferredStokes,
+    NiLine,
+    Photosphere,
+    default_wavelength,
+    model_photosphere,
+)
 from gongsynth.validation import check_quantity
 
 __all__ = ["LEVELS", "STRONG_FIELDS", "DEFAULT_THETA", "LIBRARY_SEED", "PatchLibrary", "build_library",
@@ -202,20 +211,30 @@ def _analyser(mueller):
     return n_e, e_index, tuple(float(c) for c in coeff[:, 3]), weights, bool(np.all(e_rows[:, 2] == 0))
 
 
-def _rows(cube, photosphere, basis, e_weights, ld):
-    """Stored rows (n, K) of a synthesised cube and its photosphere's B_z and B_x."""
-    stokes = [getattr(cube, name).value.reshape(-1, cube.shape[-1]) for name in ("I", "Q", "U", "V")]
-    parts = []
-    for w in e_weights:
-        used = [(np.float32(c), s) for c, s in zip(w, stokes[:3]) if c != 0]
-        spectra = used[0][1] if len(used) == 1 and used[0][0] == 1 else sum(c * s for c, s in used)
-        cont, coords = basis.coordinates(spectra)
-        parts += [cont[:, None], coords]
-    cont, coords = basis.coordinates(stokes[3])
-    parts += [cont[:, None], coords]
-    rows = np.concatenate(parts, axis=1) / ld
-    bx, _, bz = photosphere.field_vector()
-    return np.concatenate([rows, bz.reshape(-1, 1), bx.reshape(-1, 1)], axis=1)
+def _row_weights(basis, e_weights, ld):
+    """
+    (n_out, 4, nλ) float64 weights of a stored row's spectral part (all but B_z, B_x).
+
+    A row is, per analyser E part and for V, the continuum (the mean of the
+    first and last samples) and the basis coordinates ``E_k · (S - S_cont)``,
+    divided by the continuum limb darkening ``ld``: all linear in the Stokes
+    spectra, so `gongsynth.sun.photosphere.DeferredStokes.project` contracts
+    each column's spectra with them without storing them.
+    """
+    lam = basis.vectors.shape[1]
+    edges = np.zeros(lam)
+    edges[[0, -1]] = 0.5
+    per_part = np.concatenate([edges[None], basis.vectors - basis.vectors.sum(axis=1)[:, None] * edges[None]])
+    stokes = [np.append(np.asarray(w, dtype=float), 0.0) for w in e_weights] + [np.array([0.0, 0, 0, 1])]
+    weights = np.concatenate([c[None, :, None] * per_part[:, None, :] for c in stokes])
+    return weights / ld
+
+
+def _project_rows(photosphere, mu, weights, wavelength, inst, line):
+    """(ny, nx, n_out) float64: the spectra seen at ``mu`` from +x, contracted with ``weights``."""
+    spectra = DeferredStokes(photosphere, mu=mu, los_azimuth=0 * u.deg, wavelength=wavelength,
+                             instrument=inst, line=line)
+    return np.moveaxis(spectra.project(weights), 0, -1)
 
 
 def _uniform_photosphere(field_g, continuum):
@@ -299,6 +318,8 @@ def build_library(*, seed=0, shape=(256, 256), pixel_size=384 * u.km, seeds_per_
         knobs.pop(fixed, None)
     root = as_seed_sequence(seed)
     k_row = (n_e + 1) * (basis.rank + 1) + 2
+    n_spec = k_row - 2
+    weights = [_row_weights(basis, e_weights, factor) for factor in ld]
     ny, nx = shape
     # (patch, y, x, angle, row): a sample's two angles are neighbours in memory.
     patches = np.empty((sum(seeds_per_level), ny, nx, theta.size, k_row), dtype=_FLOAT)
@@ -311,11 +332,12 @@ def build_library(*, seed=0, shape=(256, 256), pixel_size=384 * u.km, seeds_per_
                 seed=child_sequence(root, "library", number, variant),
                 **{**knobs, **overrides, "spot": False, "plage": False})
             nets.append(float(photosphere.bz.to_value(u.G).mean()))
-            for t, (m, factor) in enumerate(zip(mu, ld)):
-                cube = synthesize(photosphere, mu=float(m), los_azimuth=0 * u.deg, wavelength=wavelength,
-                                  instrument=inst, line=line)
-                patches[index, :, :, t] = _rows(cube, photosphere, basis, e_weights,
-                                                factor).reshape(ny, nx, k_row)
+            for t, w in enumerate(weights):
+                patches[index, :, :, t, :n_spec] = _project_rows(photosphere, float(mu[t]), w, wavelength,
+                                                                 inst, line)
+            bx, _, bz = photosphere.field_vector()
+            patches[index, ..., n_spec] = bz[..., None]
+            patches[index, ..., n_spec + 1] = bx[..., None]
             members.append(index)
             index += 1
         level_patches.append(tuple(members))
@@ -324,10 +346,10 @@ def build_library(*, seed=0, shape=(256, 256), pixel_size=384 * u.km, seeds_per_
     uniform = np.empty((len(strong_fields), theta.size, k_row), dtype=_FLOAT)
     for number, (strength, continuum) in enumerate(strong_fields):
         column = _uniform_photosphere(strength.to_value(u.G), continuum)
-        for t, (m, factor) in enumerate(zip(mu, ld)):
-            cube = synthesize(column, mu=float(m), los_azimuth=0 * u.deg, wavelength=wavelength,
-                              instrument=inst, line=line)
-            uniform[number, t] = _rows(cube, column, basis, e_weights, factor)[0]
+        for t, w in enumerate(weights):
+            uniform[number, t, :n_spec] = _project_rows(column, float(mu[t]), w, wavelength, inst, line)[0, 0]
+        uniform[number, :, n_spec] = strength.to_value(u.G)
+        uniform[number, :, n_spec + 1] = 0.0
         level_net.append(float(strength.to_value(u.G)))
         names.append(f"uniform {strength.to_value(u.G):.0f} G")
     net = np.array(level_net)
@@ -346,7 +368,7 @@ def build_library(*, seed=0, shape=(256, 256), pixel_size=384 * u.km, seeds_per_
                         v_sign=v_sign, mirror_ok=mirror_ok, line=line, meta=meta)
 
 
-# ---- caching: the library depends only on its arguments; building it takes ~10 s, loading < 1 s.
+# ---- caching: the library depends only on its arguments; building it takes ~6 s, loading < 1 s.
 
 _MEMO = {}
 # Modules whose code shapes the stored numbers: a change to any of them is a new library.
