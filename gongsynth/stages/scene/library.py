@@ -28,6 +28,11 @@ and viewing angle and keeps only what the channels need:
 
 Each patch is periodic; the scene never repeats one over the disk (random
 offsets, rotations and mirrors per cell of the surface).
+
+This module builds the library of the Milne-Eddington Sun (`build_library`,
+~6 s for the defaults on 2 cores); `gongsynth.stages.scene.library_rt` builds
+the same `PatchLibrary` from the 3-D Sun by radiative transfer (minutes).
+`cached_library` builds either once per machine and keeps it on disk.
 """
 import hashlib
 import json
