@@ -13,9 +13,11 @@ Times, in one process (ratios, not absolute times: the machines are shared):
    basis) on the same grid;
 3. with ``--runs``: whole ``simulate(mode="full-disk", duration=1 min)`` runs
    in fresh processes, with an empty and with a filled library cache, and
-   their peak resident memory.
+   their peak resident memory;
+4. with ``--rt``: the 3-D Sun's library (`build_atmosphere_library`, the
+   defaults: minutes), against the Milne-Eddington build of step 2.
 
-    python benchmarks/bench_fulldisk.py [--quick] [--runs]
+    python benchmarks/bench_fulldisk.py [--quick] [--runs] [--rt]
 """
 import argparse
 import os
@@ -58,6 +60,7 @@ def main():
     parser.add_argument("--quick", action="store_true",
                         help="old path on 400 rows through the centre, extrapolated")
     parser.add_argument("--runs", action="store_true", help="also time whole runs in fresh processes")
+    parser.add_argument("--rt", action="store_true", help="also build the 3-D Sun's library (minutes)")
     args = parser.parse_args()
 
     import gongsynth
@@ -75,6 +78,15 @@ def main():
     # -- the library: build (cold), save and load (the cache), render
     library, wall, cpu = timed(build_library, seed=LIBRARY_SEED, instrument=inst)
     print(f"library build        {wall:6.2f} s wall {cpu:6.2f} s cpu   {library}")
+    me_build = wall
+    if args.rt:
+        from gongsynth.stages.scene.library_rt import build_atmosphere_library
+        # compile the kernels first
+        build_atmosphere_library(shape=(8, 8), pixel_size=3 * u.Mm, theta=(0, 60), knobs={"nz": 40})
+        rt_library, wall, cpu = timed(build_atmosphere_library, seed=LIBRARY_SEED, instrument=inst)
+        print(f"3-D library build    {wall:6.2f} s wall {cpu:6.2f} s cpu   {rt_library}  "
+              f"({wall / me_build:.0f}x the Milne-Eddington build)")
+        del rt_library
     with tempfile.TemporaryDirectory() as cache:
         os.environ["GONGSYNTH_CACHE_DIR"] = cache
         cached_library(seed=LIBRARY_SEED, instrument=inst)               # builds and saves

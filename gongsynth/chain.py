@@ -231,10 +231,13 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
             knobs = {k: v for k, v in config.sun_arguments().items() if k not in ("shape", "pixel_size")}
             # The library's own fixed seed: every run seed shares it (and its cache); the
             # run's seed lays the patches out in the scene stage.
-            return {"photosphere": cached_library(seed=LIBRARY_SEED, knobs=knobs, instrument=inst)}
+            return {"photosphere": cached_library(seed=LIBRARY_SEED, knobs=knobs, instrument=inst,
+                                                  sun=config.sun, progress=progress)}
 
+        how = ("the 3-D model atmosphere by LTE radiative transfer" if config.sun == "model-atmosphere"
+               else "Milne-Eddington columns")
         stages.append(Stage("photosphere", (), ("photosphere",), library,
-                            "the built-in Sun's patch library: quiet to plage, synthesised at 11 angles"))
+                            f"the built-in Sun's patch library: quiet to sunspot, {how}, at a set of angles"))
     elif stokes is None:
         def photosphere():
             return {"photosphere": SUNS[config.sun](seed=child_sequence(config.seed, "photosphere"),

@@ -235,7 +235,8 @@ class SimulationConfig:
         ISO time of the observation.
     sun : str or None
         The built-in Sun (a key of `SUNS`): ``"model-atmosphere"`` (the 3-D
-        model atmosphere through LTE radiative transfer; tiled mode only) or
+        model atmosphere through LTE radiative transfer; over the full disk
+        its patch library takes minutes to build once, then is cached) or
         ``"milne-eddington"`` (the column photosphere: fast, one line strength
         everywhere, a toy for calibration).  None (default): the mode's
         default, `default_sun` (recorded).
@@ -317,9 +318,6 @@ class SimulationConfig:
             object.__setattr__(self, "sun", default_sun(self.mode))
         if self.sun not in SUNS:
             raise ValueError(f"sun must be one of {tuple(SUNS)}, got {self.sun!r}")
-        if self.sun == "model-atmosphere" and self.mode == "full-disk":
-            raise ValueError("sun = 'model-atmosphere' runs in mode = 'tiled' only: the full disk maps the "
-                             "'milne-eddington' Sun at every point's viewing angle")
         if self.photosphere_shape is None:
             object.__setattr__(self, "photosphere_shape", run_grid_default(self.sun, "shape"))
         if self.photosphere_pixel_size is None:

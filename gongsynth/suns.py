@@ -25,7 +25,10 @@ SUNS = {"milne-eddington": model_photosphere, "model-atmosphere": model_atmosphe
 #: box of 96 km columns, too small for a spot, gives 1.06 / 0.69.
 RUN_GRIDS = {"model-atmosphere": {"shape": (256, 256), "pixel_size": 384 * u.km}}
 
-#: The built-in Sun of each scene mode when none is named.
+#: The built-in Sun of each scene mode when none is named.  The full disk keeps the Milne-Eddington
+#: columns: its patch library builds in ~6 s, within the first run's 20 s budget, while the 3-D Sun's
+#: (``sun = "model-atmosphere"``, `gongsynth.stages.scene.library_rt`) takes minutes by radiative
+#: transfer (once per machine: it is cached), which that budget cannot hold.
 DEFAULT_SUNS = {"tiled": "model-atmosphere", "full-disk": "milne-eddington"}
 
 #: Arguments of the built-in Suns set by [simulation] instead of [photosphere].
@@ -35,8 +38,8 @@ PHOTOSPHERE_RUN_KEYS = ("shape", "pixel_size", "seed")
 def default_sun(mode="tiled"):
     """
     The built-in Sun a run uses when none is named: the 3-D model atmosphere in
-    tiled mode; the Milne-Eddington columns over the full disk (the 3-D Sun
-    is not mapped over the disk yet).
+    tiled mode; the Milne-Eddington columns over the full disk (the 3-D Sun's
+    patch library takes minutes to build; name it to use it).
 
     Parameters
     ----------

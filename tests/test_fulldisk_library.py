@@ -16,13 +16,14 @@ from sunpy.coordinates import HeliographicStonyhurst
 
 from gongsynth import GONGInstrument
 from gongsynth.geometry import disk_geometry
+from gongsynth.seeding import as_seed_sequence, child_sequence
 from gongsynth.stages.channels import channel_images
 from gongsynth.stages.optics import expected_counts
 from gongsynth.stages.reduction import reduce
 from gongsynth.stages.scene import library as library_module
 from gongsynth.stages.scene.disk_render import library_scene
 from gongsynth.stages.scene.fulldisk import full_disk_scene
-from gongsynth.stages.scene.library import DEFAULT_THETA, build_library, cached_library
+from gongsynth.stages.scene.library import DEFAULT_THETA, LEVELS, build_library, cached_library
 from gongsynth.stages.scene.scene import radiance_at_earth
 from gongsynth.stages.scene.shifts import shift_basis, shifted_channel_weights
 from gongsynth.stages.scene.surface import large_scale_grid, sample_surface_field
@@ -108,6 +109,37 @@ def test_library_levels(small_library):
     # The enhanced network: the stored B_z's mean is the level's net flux.
     quiet = lib.patches[lib.level_patches[1][0], :, :, 0, layout["bz"]]
     assert quiet.mean() == pytest.approx(lib.level_net[1], rel=1e-4)
+
+
+def test_library_rows_are_the_stored_spectra_projected():
+    """The fused build equals synthesising each cube and projecting it on the basis, to float32 rounding."""
+    theta = (0.0, 50.0, 85.0)
+    lib = build_library(shape=(16, 16), pixel_size=6 * u.Mm, seeds_per_level=(1, 1, 1, 1), theta=theta,
+                        seed=4)
+    layout = lib.layout()
+    vectors = lib.basis.vectors
+    eps = np.finfo(np.float32).eps
+    for level, overrides in ((0, LEVELS[0][1]), (3, LEVELS[3][1])):
+        ph = model_photosphere(shape=(16, 16), pixel_size=6 * u.Mm, seed=child_sequence(
+            as_seed_sequence(4), "library", level, 0), **overrides, spot=False, plage=False)
+        stored = lib.patches[lib.level_patches[level][0]]
+        for t, angle in enumerate(theta):
+            mu = np.cos(np.radians(angle))
+            cube = synthesize(ph, mu=mu, los_azimuth=0 * u.deg)      # float32 spectra, as stored before
+            ld = lib.line.limb_darkening_factor(mu)
+            for name, start in (("I", layout["e"][0]), ("V", layout["v"])):
+                spectra = getattr(cube, name).value.reshape(-1, vectors.shape[1])
+                cont, coords = lib.basis.coordinates(spectra)
+                want = np.concatenate([cont[:, None], coords], axis=1) / ld
+                got = stored[:, :, t, start:start + vectors.shape[0] + 1].reshape(want.shape)
+                # The stored cube's float32 rounding, carried through the basis vectors (|E| summed).
+                size = np.abs(cube.I.value).max() / ld
+                bound = 4 * eps * size * np.concatenate([[1.0], 1 + np.abs(vectors).sum(axis=1)])
+                assert np.all(np.abs(got - want) <= bound)
+                assert np.abs(want[:, 1:]).max() > 100 * bound.max()     # the rows carry signal
+        bx, _, bz = ph.field_vector()
+        assert np.array_equal(stored[:, :, 1, layout["bz"]], bz.astype(np.float32))
+        assert np.array_equal(stored[:, :, 1, layout["bx"]], bx.astype(np.float32))
 
 
 def test_a_uniform_level_equals_direct_synthesis_at_each_sample(small_library):

@@ -67,7 +67,9 @@ def library_scene(library, *, obstime=None, instrument=None, detector_shape=None
     site : `~astropy.coordinates.EarthLocation`, optional
         Ground site (its daily rotation adds to the observer's velocity).
     velocities : bool or dict, optional
-        Which large-scale velocities shift the spectra (`VELOCITY_TERMS`).
+        Which large-scale velocities shift the spectra (`VELOCITY_TERMS`); the
+        tabulated convective blueshift is left out for a library whose spectra
+        carry their own (the 3-D Sun's, ``meta["spectra_carry_blueshift"]``).
     cell_size : `~astropy.units.Quantity`, optional
         Side of the surface cells (default 30 Mm).
     pointing : `~astropy.units.Quantity`, optional
@@ -106,6 +108,8 @@ def library_scene(library, *, obstime=None, instrument=None, detector_shape=None
     if cell_km <= 0:
         raise ValueError(f"cell_size must be positive, got {cell_size}")
     terms = _velocity_terms(velocities)
+    if library.meta.get("spectra_carry_blueshift"):
+        terms["blueshift"] = False      # the 3-D Sun's granulation shifts its own spectra
     time = as_obstime(obstime)
     _, _, det = sky_grid(inst, detector_shape=detector_shape)
     grid = (det[0] * supersampling, det[1] * supersampling)

@@ -13,18 +13,26 @@ and viewing angle and keeps only what the channels need:
   more unipolar network: its ``network_flux_density`` and
   ``network_polarity`` knobs, no sunspot), then uniform strong-field columns
   standing for pores, penumbrae and umbrae (`STRONG_FIELDS`);
-- each level's patches (one or more seeds) are synthesised
-  (`gongsynth.sun.photosphere.synthesize`, Milne-Eddington) at the viewing
-  angles ``theta`` (observer toward the patch's +x: azimuth 0) and every
-  spectrum is stored as its continuum and its coordinates in the Doppler
-  basis of `gongsynth.stages.scene.shifts` (per polarisation state, after the
-  instrument's Mueller matrix), divided by the continuum limb darkening at
-  that angle, with the true B·n;
+- each level's patches (one or more seeds) are synthesised (Milne-Eddington)
+  at the viewing angles ``theta`` (observer toward the patch's +x: azimuth 0)
+  and every spectrum is stored as its continuum and its coordinates in the
+  Doppler basis of `gongsynth.stages.scene.shifts` (per polarisation state,
+  after the instrument's Mueller matrix), divided by the continuum limb
+  darkening at that angle, with the true B·n.  Both are linear in the
+  spectrum, so the synthesis contracts each column's spectra with them at
+  once (`gongsynth.sun.photosphere.DeferredStokes.project`) and no spectrum
+  is stored: the same numbers as synthesising the float32 cubes and
+  projecting them, to their float32 rounding;
 - `gongsynth.stages.scene.fulldisk` places the patches on the sphere and
   interpolates between the angles and levels.
 
 Each patch is periodic; the scene never repeats one over the disk (random
 offsets, rotations and mirrors per cell of the surface).
+
+This module builds the library of the Milne-Eddington Sun (`build_library`,
+~6 s for the defaults on 2 cores); `gongsynth.stages.scene.library_rt` builds
+the same `PatchLibrary` from the 3-D Sun by radiative transfer (minutes).
+`cached_library` builds either once per machine and keeps it on disk.
 """
 import hashlib
 import json
@@ -41,11 +49,17 @@ from gongsynth.instrument import resolve_instrument
 from gongsynth.seeding import as_seed_sequence, child_sequence
 from gongsynth.stages.channels import analyser_coefficients
 from gongsynth.stages.scene.shifts import ShiftBasis, shift_basis
-from gongsynth.sun.photosphere import NiLine, Photosphere, default_wavelength, model_photosphere, synthesize
+from gongsynth.sun.photosphere import (
+    DeferredStokes,
+    NiLine,
+    Photosphere,
+    default_wavelength,
+    model_photosphere,
+)
 from gongsynth.validation import check_quantity
 
 __all__ = ["LEVELS", "STRONG_FIELDS", "DEFAULT_THETA", "LIBRARY_SEED", "PatchLibrary", "build_library",
-           "cached_library", "cache_directory"]
+           "cached_library", "cache_directory", "analyser_layout", "row_weights", "library_angles"]
 
 #: The patch levels: name and the `model_photosphere` knobs that set them (no
 #: sunspot, no plage patches: the flux sits in network elements of
@@ -189,8 +203,34 @@ class PatchLibrary:
                 f"J={self.rank}, {self.nbytes / 2**20:.0f} MiB>")
 
 
-def _analyser(mueller):
-    """(n_e, e_index, v_sign, E weights (n_e, 3), mirror_ok) of a global Mueller matrix."""
+def analyser_layout(mueller=None):
+    """
+    How a library stores the analyser states of a global Mueller matrix.
+
+    Parameters
+    ----------
+    mueller : array_like, optional
+        A (4, 4) instrument Mueller matrix (default: identity).
+
+    Returns
+    -------
+    n_e : int
+        1 when both analyser states share their (I, Q, U) part, else 2.
+    e_index : tuple of int
+        Which stored E part each state uses.
+    v_sign : tuple of float
+        The weight of V in each state.
+    e_weights : `numpy.ndarray`
+        (n_e, 3): the weights of I, Q, U in each stored E part.
+    mirror_ok : bool
+        Whether patches may be mirrored (no state sees U).
+
+    Examples
+    --------
+    >>> n_e, e_index, v_sign, e_weights, mirror_ok = analyser_layout()
+    >>> n_e, e_index, v_sign, e_weights.tolist(), mirror_ok
+    (1, (0, 0), (1.0, -1.0), [[1.0, 0.0, 0.0]], True)
+    """
     coeff = analyser_coefficients(mueller)
     if coeff.ndim != 2:
         raise ValueError("the full-disk library takes one (4, 4) Mueller matrix for the whole field")
@@ -202,20 +242,78 @@ def _analyser(mueller):
     return n_e, e_index, tuple(float(c) for c in coeff[:, 3]), weights, bool(np.all(e_rows[:, 2] == 0))
 
 
-def _rows(cube, photosphere, basis, e_weights, ld):
-    """Stored rows (n, K) of a synthesised cube and its photosphere's B_z and B_x."""
-    stokes = [getattr(cube, name).value.reshape(-1, cube.shape[-1]) for name in ("I", "Q", "U", "V")]
-    parts = []
-    for w in e_weights:
-        used = [(np.float32(c), s) for c, s in zip(w, stokes[:3]) if c != 0]
-        spectra = used[0][1] if len(used) == 1 and used[0][0] == 1 else sum(c * s for c, s in used)
-        cont, coords = basis.coordinates(spectra)
-        parts += [cont[:, None], coords]
-    cont, coords = basis.coordinates(stokes[3])
-    parts += [cont[:, None], coords]
-    rows = np.concatenate(parts, axis=1) / ld
-    bx, _, bz = photosphere.field_vector()
-    return np.concatenate([rows, bz.reshape(-1, 1), bx.reshape(-1, 1)], axis=1)
+def row_weights(basis, e_weights, ld):
+    """
+    The weights that turn Stokes spectra into a stored row's spectral part (all but B_z, B_x).
+
+    A row is, per analyser E part and for V, the continuum (the mean of the
+    first and last samples) and the basis coordinates ``E_k · (S - S_cont)``,
+    divided by the continuum limb darkening ``ld``: all linear in the Stokes
+    spectra, so a synthesis can contract each column's spectra with them
+    without storing them (`gongsynth.sun.photosphere.DeferredStokes.project`).
+
+    Parameters
+    ----------
+    basis : `~gongsynth.stages.scene.shifts.ShiftBasis`
+    e_weights : `numpy.ndarray`
+        (n_e, 3), from `analyser_layout`.
+    ld : float
+        Continuum limb darkening at the viewing angle.
+
+    Returns
+    -------
+    `numpy.ndarray`
+        (n_out, 4, nλ) float64, n_out = (n_e + 1)(J + 1): ``row[o] = Σ_s Σ_j w[o, s, j] S_s(λ_j)``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from gongsynth.stages.scene.shifts import shift_basis
+    >>> from gongsynth.sun.photosphere import default_wavelength
+    >>> basis = shift_basis(default_wavelength())
+    >>> w = row_weights(basis, analyser_layout()[3], 1.0)
+    >>> w.shape, float(w[0, 0] @ np.ones(51)), float(np.abs(w[1, 0] @ np.ones(51)))   # continuum: 1, line: 0
+    ((22, 4, 51), 1.0, 0.0)
+    """
+    lam = basis.vectors.shape[1]
+    edges = np.zeros(lam)
+    edges[[0, -1]] = 0.5
+    per_part = np.concatenate([edges[None], basis.vectors - basis.vectors.sum(axis=1)[:, None] * edges[None]])
+    stokes = [np.append(np.asarray(w, dtype=float), 0.0) for w in e_weights] + [np.array([0.0, 0, 0, 1])]
+    weights = np.concatenate([c[None, :, None] * per_part[:, None, :] for c in stokes])
+    return weights / ld
+
+
+def library_angles(theta):
+    """
+    Checked viewing angles of a library.
+
+    Parameters
+    ----------
+    theta : sequence of float
+        Deg, increasing from 0 to below 90.
+
+    Returns
+    -------
+    `numpy.ndarray`
+        float64 (n,).
+
+    Examples
+    --------
+    >>> library_angles((0, 45, 80)).tolist()
+    [0.0, 45.0, 80.0]
+    """
+    theta = np.asarray(theta, dtype=float)
+    if theta.ndim != 1 or theta.size < 2 or theta[0] != 0 or np.any(np.diff(theta) <= 0) or theta[-1] >= 90:
+        raise ValueError(f"theta must increase from 0 to below 90 deg, got {theta.tolist()}")
+    return theta
+
+
+def _project_rows(photosphere, mu, weights, wavelength, inst, line):
+    """(ny, nx, n_out) float64: the spectra seen at ``mu`` from +x, contracted with ``weights``."""
+    spectra = DeferredStokes(photosphere, mu=mu, los_azimuth=0 * u.deg, wavelength=wavelength,
+                             instrument=inst, line=line)
+    return np.moveaxis(spectra.project(weights), 0, -1)
 
 
 def _uniform_photosphere(field_g, continuum):
@@ -284,13 +382,11 @@ def build_library(*, seed=0, shape=(256, 256), pixel_size=384 * u.km, seeds_per_
     line = NiLine() if line is None else line
     wavelength = default_wavelength() if wavelength is None else wavelength
     check_quantity(pixel_size, u.km, "pixel_size")
-    theta = np.asarray(theta, dtype=float)
-    if theta.ndim != 1 or theta.size < 2 or theta[0] != 0 or np.any(np.diff(theta) <= 0) or theta[-1] >= 90:
-        raise ValueError(f"theta must increase from 0 to below 90 deg, got {theta.tolist()}")
+    theta = library_angles(theta)
     if len(seeds_per_level) != len(levels) or min(seeds_per_level) < 1:
         raise ValueError(f"seeds_per_level needs one positive count per level ({len(levels)}), "
                          f"got {seeds_per_level!r}")
-    n_e, e_index, v_sign, e_weights, mirror_ok = _analyser(mueller)
+    n_e, e_index, v_sign, e_weights, mirror_ok = analyser_layout(mueller)
     basis = shift_basis(wavelength, inst, max_velocity=max_velocity)
     mu = np.cos(np.radians(theta))
     ld = line.limb_darkening_factor(mu)
@@ -299,6 +395,8 @@ def build_library(*, seed=0, shape=(256, 256), pixel_size=384 * u.km, seeds_per_
         knobs.pop(fixed, None)
     root = as_seed_sequence(seed)
     k_row = (n_e + 1) * (basis.rank + 1) + 2
+    n_spec = k_row - 2
+    weights = [row_weights(basis, e_weights, factor) for factor in ld]
     ny, nx = shape
     # (patch, y, x, angle, row): a sample's two angles are neighbours in memory.
     patches = np.empty((sum(seeds_per_level), ny, nx, theta.size, k_row), dtype=_FLOAT)
@@ -311,11 +409,12 @@ def build_library(*, seed=0, shape=(256, 256), pixel_size=384 * u.km, seeds_per_
                 seed=child_sequence(root, "library", number, variant),
                 **{**knobs, **overrides, "spot": False, "plage": False})
             nets.append(float(photosphere.bz.to_value(u.G).mean()))
-            for t, (m, factor) in enumerate(zip(mu, ld)):
-                cube = synthesize(photosphere, mu=float(m), los_azimuth=0 * u.deg, wavelength=wavelength,
-                                  instrument=inst, line=line)
-                patches[index, :, :, t] = _rows(cube, photosphere, basis, e_weights,
-                                                factor).reshape(ny, nx, k_row)
+            for t, w in enumerate(weights):
+                patches[index, :, :, t, :n_spec] = _project_rows(photosphere, float(mu[t]), w, wavelength,
+                                                                 inst, line)
+            bx, _, bz = photosphere.field_vector()
+            patches[index, ..., n_spec] = bz[..., None]
+            patches[index, ..., n_spec + 1] = bx[..., None]
             members.append(index)
             index += 1
         level_patches.append(tuple(members))
@@ -324,10 +423,10 @@ def build_library(*, seed=0, shape=(256, 256), pixel_size=384 * u.km, seeds_per_
     uniform = np.empty((len(strong_fields), theta.size, k_row), dtype=_FLOAT)
     for number, (strength, continuum) in enumerate(strong_fields):
         column = _uniform_photosphere(strength.to_value(u.G), continuum)
-        for t, (m, factor) in enumerate(zip(mu, ld)):
-            cube = synthesize(column, mu=float(m), los_azimuth=0 * u.deg, wavelength=wavelength,
-                              instrument=inst, line=line)
-            uniform[number, t] = _rows(cube, column, basis, e_weights, factor)[0]
+        for t, w in enumerate(weights):
+            uniform[number, t, :n_spec] = _project_rows(column, float(mu[t]), w, wavelength, inst, line)[0, 0]
+        uniform[number, :, n_spec] = strength.to_value(u.G)
+        uniform[number, :, n_spec + 1] = 0.0
         level_net.append(float(strength.to_value(u.G)))
         names.append(f"uniform {strength.to_value(u.G):.0f} G")
     net = np.array(level_net)
@@ -346,13 +445,15 @@ def build_library(*, seed=0, shape=(256, 256), pixel_size=384 * u.km, seeds_per_
                         v_sign=v_sign, mirror_ok=mirror_ok, line=line, meta=meta)
 
 
-# ---- caching: the library depends only on its arguments; building it takes ~10 s, loading < 1 s.
+# ---- caching: the library depends only on its arguments; building it takes ~6 s, loading < 1 s.
 
 _MEMO = {}
 # Modules whose code shapes the stored numbers: a change to any of them is a new library.
 _SOURCES = ("stages/scene/library.py", "stages/scene/shifts.py", "stages/filters.py", "stages/channels.py",
             "sun/photosphere/model.py", "sun/photosphere/synthesis.py", "sun/photosphere/_kernel.py",
             "sun/photosphere/line.py", "sun/photosphere/columns.py")
+# ... and of the 3-D Sun's library (folders: every module in them).
+_SOURCES_3D = ("stages/scene/library_rt.py", "sun/atmosphere.py", "sun/model_atmosphere", "sun/rt")
 _ARRAYS = ("patches", "uniform", "theta", "level_net")
 _BASIS = ("wavelength", "vectors", "velocity", "amplitudes", "totals")
 
@@ -382,14 +483,15 @@ _INSTRUMENT_KEYS = ("line_wavelength", "lande_g", "prefilter_center", "prefilter
                     "michelson_angle", "waveplate_step", "integration_half_width", "quadrature_step")
 
 
-def _key(arguments):
-    arguments = dict(arguments)
+def _key(arguments, sun):
+    arguments = dict(arguments, sun=sun)
     inst = resolve_instrument(arguments.pop("instrument", None))
     arguments["instrument"] = {name: getattr(inst, name) for name in _INSTRUMENT_KEYS}
     root = Path(__file__).resolve().parents[2]
     digest = hashlib.sha256()
-    for name in _SOURCES:
-        digest.update((root / name).read_bytes())
+    for name in _SOURCES + (_SOURCES_3D if sun == "model-atmosphere" else ()):
+        for path in (sorted((root / name).glob("*.py")) if (root / name).is_dir() else [root / name]):
+            digest.update(path.read_bytes())
     text = json.dumps({k: repr(v) for k, v in sorted(arguments.items())}, sort_keys=True)
     digest.update(text.encode())
     digest.update(np.__version__.encode())
@@ -429,18 +531,25 @@ def _load(folder, line):
                         meta={**small["meta"], "cache": str(folder)})
 
 
-def cached_library(**arguments):
+def cached_library(*, sun="milne-eddington", progress=False, **arguments):
     """
-    `build_library`, built once per argument set and kept in memory and on disk.
+    The patch library of a built-in Sun, built once per argument set and kept in memory and on disk.
 
-    The disk copy (`cache_directory`; ~300 MB for the defaults) is keyed by
-    the arguments and by the source of every module that shapes the numbers
-    (so a code change builds a new one); the patches are memory-mapped from it.
+    The disk copy (`cache_directory`; ~300 MB for the Milne-Eddington
+    defaults) is keyed by the Sun, the arguments and the source of every
+    module that shapes the numbers (so a code change builds a new one); the
+    patches are memory-mapped from it.
 
     Parameters
     ----------
+    sun : {"milne-eddington", "model-atmosphere"}, optional
+        `build_library` (Milne-Eddington columns, seconds) or
+        `gongsynth.stages.scene.library_rt.build_atmosphere_library` (the 3-D
+        Sun by radiative transfer, minutes).
+    progress : bool, optional
+        A progress bar while the 3-D library builds (not part of the key).
     **arguments
-        `build_library` arguments (an int seed).
+        The builder's arguments (an int seed).
 
     Returns
     -------
@@ -453,10 +562,20 @@ def cached_library(**arguments):
     >>> cached_library(**args) is cached_library(**args)
     True
     """
+    if sun == "milne-eddington":
+        def build():
+            return build_library(**arguments)
+    elif sun == "model-atmosphere":
+        from gongsynth.stages.scene.library_rt import build_atmosphere_library
+
+        def build():
+            return build_atmosphere_library(progress=progress, **arguments)
+    else:
+        raise ValueError(f"sun must be 'milne-eddington' or 'model-atmosphere', got {sun!r}")
     seed = arguments.get("seed", 0)
     if not isinstance(seed, (int, np.integer)):
-        return build_library(**arguments)
-    key = _key(arguments)
+        return build()
+    key = _key(arguments, sun)
     if key in _MEMO:
         return _MEMO[key]
     folder = None if cache_directory() is None else cache_directory() / f"library-{key}"
@@ -467,7 +586,7 @@ def cached_library(**arguments):
         except (OSError, ValueError, KeyError):
             library = None
     if library is None:
-        library = build_library(**arguments)
+        library = build()
         if folder is not None:
             _save(library, folder)
     _MEMO.clear()      # keep one: a library is ~300 MB

@@ -133,6 +133,14 @@ def me_project_kernel(vgrid, vshift, vzeeman, cosg, qfac, ufac, bmu, scale, eta0
     n_out = weights.shape[0]
     nl = vgrid.size
     npix = vshift.size
+    # Stokes parameters an output does not use (zero weights: Q and U of the I±V analysis) are
+    # skipped; leaving out exact zeros does not change the sum.
+    used = np.zeros((n_out, 4), dtype=np.bool_)
+    for o in range(n_out):
+        for s in range(4):
+            for j in range(nl):
+                if weights[o, s, j] != 0.0:
+                    used[o, s] = True
     chunk = 64
     for c in nb.prange((npix + chunk - 1) // chunk):
         spectrum = np.empty((4, nl))
@@ -147,6 +155,7 @@ def me_project_kernel(vgrid, vshift, vzeeman, cosg, qfac, ufac, bmu, scale, eta0
             for o in range(n_out):
                 acc = 0.0
                 for s in range(4):
-                    for j in range(nl):
-                        acc += weights[o, s, j] * spectrum[s, j]
+                    if used[o, s]:
+                        for j in range(nl):
+                            acc += weights[o, s, j] * spectrum[s, j]
                 out[o, p] = acc
