@@ -56,8 +56,7 @@ _M2 = _U(0x94D049BB133111EB)
 _TO_UNIT52 = 1.0 / 4503599627370496.0  # 2**-52
 
 #: Pixels per block of the vectorised frame loop.
-LANES = 64
-_WORDS = LANES // 64
+LANES = 128
 #: Means from this up (and 0) use algorithm PD, smaller ones inversion.
 PD_MIN_LAM = 10.0
 # Longest inversion table: λ + 10√λ + 10 < 51.7 for λ < 10.
@@ -121,6 +120,7 @@ def _uniform(s):
 _ZBITS = 11
 _ZABS = 46
 _ZT, _ZF, _ZR = ziggurat_tables(1 << _ZBITS, _ZABS)
+assert np.all(_ZT != 0)
 #: Edge of the ziggurat's base strip: normal variates beyond it come from the exact tail.
 ZIGGURAT_R = _ZR
 _ZLAYER = _U((1 << _ZBITS) - 1)
@@ -139,9 +139,8 @@ for _b in range(64):
 
 
 @njit(inline="always")
-def _rectangle(r):
-    """(inside, x): the ziggurat's common case for draw ``r`` (one table word); x is the variate if inside."""
-    t = _ZT[r & _ZLAYER]
+def _rectangle(r, t):
+    """(inside, x): the ziggurat's common case for draw ``r`` and its layer's table word ``t``."""
     j = (r >> _U(_ZBITS + 1)) & _ZMASK
     x = np.float64(j) * as_float64(t)
     x = -x if (r >> _U(_ZBITS)) & _U(1) else x
@@ -290,7 +289,7 @@ def _fine(coarse, r):
     return (np.float64((coarse << _U(52 - _COARSE)) | (r >> _U(12 + _COARSE))) + 0.5) * _TO_UNIT52
 
 
-@njit(cache=True)
+@njit(inline="always")
 def _complete_pd(s, r1, r2, q, photon):
     """
     (electrons, read-noise normal, state) of one pixel-frame from its two draws, by the whole algorithm.
@@ -345,7 +344,9 @@ def _run_block(lam, i0, lanes, seg_start, seg_snap, plane, inv_gain, sigma, phot
     draws = np.empty((2, LANES), np.uint64)
     n_out = np.empty(LANES)
     z_out = np.empty(LANES)
-    masks = np.empty(_WORDS, np.uint64)
+    flags = np.zeros(LANES, np.uint8)
+    tw = np.empty((2, LANES), np.uint64)
+    words = flags.view(np.uint64)
     keep = record.shape[0] > 0
     for j in range(seg_snap.size):
         snap = seg_snap[j]
@@ -370,43 +371,50 @@ def _run_block(lam, i0, lanes, seg_start, seg_snap, plane, inv_gain, sigma, phot
                     st[0, lane], st[1, lane], st[2, lane], st[3, lane] = s0, s1, s2, s3
                     draws[0, lane] = r1
                     draws[1, lane] = r2
-                for w in range(_WORDS):
-                    masks[w] = ~_U(0)
+                flags[:] = 1
             else:
-                for w in range(_WORDS):
-                    # The common path of every sampler, branch-free so that it vectorises
-                    # across the block; the pixels it cannot finish are marked in ``mask``.
-                    mask = _U(0)
-                    for bit in range(64):
-                        lane = w * 64 + bit
-                        r1, s0, s1, s2, s3 = _step(st[0, lane], st[1, lane], st[2, lane], st[3, lane])
-                        r2, s0, s1, s2, s3 = _step(s0, s1, s2, s3)
-                        st[0, lane], st[1, lane], st[2, lane], st[3, lane] = s0, s1, s2, s3
-                        ok1, z1 = _rectangle(r1)
-                        ok2, z2 = _rectangle(r2)
-                        mean = c[_LAM, p, lane]
-                        g = mean + c[_SLAM, p, lane] * z1
-                        n = np.floor(g)
-                        diff = mean - n
-                        u = np.float64(_coarse(r1, r2)) * _TO_COARSE
-                        accept = ok1 & (g >= 0.0) & ((n >= c[_BIGL, p, lane])
-                                                     | (c[_D, p, lane] * u >= diff * diff * diff))
-                        accept = (accept if photon else True) & ok2
-                        n = n if photon else mean
-                        draws[0, lane] = r1
-                        draws[1, lane] = r2
-                        n_out[lane] = n
-                        z_out[lane] = z2
-                        adu = np.int64(math.floor(n * inv_gain + sigma * z2 + 0.5))
-                        acc[p, lane] += adu if accept else 0
-                        mask |= _U(0 if accept else 1) << _U(bit)
-                    masks[w] = mask
+                # The common path of every sampler, branch-free so that it vectorises
+                # across the block; the pixels it cannot finish are flagged.
+                for lane in range(LANES):
+                    r1, s0, s1, s2, s3 = _step(st[0, lane], st[1, lane], st[2, lane], st[3, lane])
+                    r2, s0, s1, s2, s3 = _step(s0, s1, s2, s3)
+                    st[0, lane], st[1, lane], st[2, lane], st[3, lane] = s0, s1, s2, s3
+                    draws[0, lane] = r1
+                    draws[1, lane] = r2
+                # The layers' table words by scalar loads: the early exit (never taken: no word is 0)
+                # keeps this loop scalar, as vector gathers cost more than twice as much.
+                for lane in range(LANES):
+                    a = _ZT[draws[0, lane] & _ZLAYER]
+                    b = _ZT[draws[1, lane] & _ZLAYER]
+                    if (a | b) == _U(0):
+                        break
+                    tw[0, lane] = a
+                    tw[1, lane] = b
+                for lane in range(LANES):
+                    r1 = draws[0, lane]
+                    r2 = draws[1, lane]
+                    ok1, z1 = _rectangle(r1, tw[0, lane])
+                    ok2, z2 = _rectangle(r2, tw[1, lane])
+                    mean = c[_LAM, p, lane]
+                    g = mean + c[_SLAM, p, lane] * z1
+                    n = np.floor(g)
+                    diff = mean - n
+                    u = np.float64(_coarse(r1, r2)) * _TO_COARSE
+                    accept = ok1 & (g >= 0.0) & ((n >= c[_BIGL, p, lane])
+                                                 | (c[_D, p, lane] * u >= diff * diff * diff))
+                    accept = (accept if photon else True) & ok2
+                    n = n if photon else mean
+                    n_out[lane] = n
+                    z_out[lane] = z2
+                    adu = np.int64(math.floor(n * inv_gain + sigma * z2 + 0.5))
+                    acc[p, lane] += adu if accept else 0
+                    flags[lane] = np.uint8(0 if accept else 1)
             # The rest: the whole algorithm, continuing each pixel's stream.
-            for w in range(_WORDS):
-                mask = masks[w]
+            for w in range(LANES // 8):
+                mask = words[w]
                 while mask:
                     low = mask & (~mask + _U(1))
-                    lane = w * 64 + _DEBRUIJN_INDEX[(low * _DEBRUIJN) >> _U(58)]
+                    lane = w * 8 + (_DEBRUIJN_INDEX[(low * _DEBRUIJN) >> _U(58)] >> 3)
                     mask ^= low
                     s = (st[0, lane], st[1, lane], st[2, lane], st[3, lane])
                     r1 = draws[0, lane]
