@@ -63,8 +63,8 @@ PD_MIN_LAM = 10.0
 TABLE_LEN = 52
 
 # Rows of the per-block constants (N_CONST, n_planes, LANES).
-_LAM, _SLAM, _BIGL, _D, _LOGLAM, _OMEGA, _C0, _C1, _C2, _C3, _CHAT, _M, _SLOT = range(13)
-N_CONST = 13
+_LAM, _SLAM, _BIGL, _D, _LOGLAM, _OMEGA, _C0, _C1, _C2, _C3, _CHAT, _M, _SLOT, _FRAC = range(14)
+N_CONST = 14
 _INV_SQRT_2PI = 0.3989422804014327
 
 
@@ -187,17 +187,25 @@ def _log_factorial(k):
 
 
 @njit(cache=True)
-def _poisson_constants(lam, c, p, lane, cdf, guide, slot):
+def _poisson_constants(lam, c, p, lane, cdf, guide, slot, photon):
     """
-    Fill ``c[:, p, lane]`` to draw Poisson variates of mean ``lam``.
+    Fill ``c[:, p, lane]`` to draw Poisson variates of mean ``lam`` (``photon``) or to give ``lam`` itself.
 
     A mean below `PD_MIN_LAM` gets its cumulative distribution in ``cdf[slot]``
     and guide table in ``guide[slot]``; its L and D are NaN so that the
     common path of `_run_block` always leaves it to the whole algorithm.  λ = 0 runs
-    through PD's constants, which give 0 on the common path.
+    through PD's constants, which give 0 on the common path.  Without
+    ``photon`` the common path's ⌊λ + 0·z1⌋ + (λ − ⌊λ⌋) is λ exactly.
     """
     c[_LAM, p, lane] = lam
     c[_M, p, lane] = 0.0
+    c[_FRAC, p, lane] = 0.0
+    if not photon:
+        c[_SLAM, p, lane] = 0.0
+        c[_BIGL, p, lane] = -np.inf
+        c[_D, p, lane] = 0.0
+        c[_FRAC, p, lane] = lam - math.floor(lam)
+        return
     if lam >= PD_MIN_LAM or lam <= 0.0:
         lam = max(lam, 0.0)
         slam = math.sqrt(lam)
@@ -360,7 +368,7 @@ def _run_block(lam, i0, lanes, seg_start, seg_snap, plane, inv_gain, sigma, phot
         for p in range(n_planes):
             for lane in range(LANES):
                 _poisson_constants(lam[snap, p, i0 + lane] if lane < lanes else 0.0, c, p, lane, cdf, guide,
-                                   slot)
+                                   slot, photon)
                 slot += c[_M, p, lane] > 0.0
         for k in range(seg_start[j], seg_start[j + 1]):
             p = plane[k]
@@ -405,10 +413,9 @@ def _run_block(lam, i0, lanes, seg_start, seg_snap, plane, inv_gain, sigma, phot
                     n = np.floor(g)
                     diff = mean - n
                     u = np.float64(_coarse(r1, r2)) * _TO_COARSE
-                    accept = ok1 & (g >= 0.0) & ((n >= c[_BIGL, p, lane])
-                                                 | (c[_D, p, lane] * u >= diff * diff * diff))
-                    accept = (accept if photon else True) & ok2
-                    n = n if photon else mean
+                    accept = ok1 & ok2 & (g >= 0.0) & ((n >= c[_BIGL, p, lane])
+                                                       | (c[_D, p, lane] * u >= diff * diff * diff))
+                    n += c[_FRAC, p, lane]
                     n_out[lane] = n
                     z_out[lane] = z2
                     adu = np.int64(math.floor(n * inv_gain + sigma * z2 + 0.5))
