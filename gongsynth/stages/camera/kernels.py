@@ -10,7 +10,10 @@ block or thread processes it.
 Pixels are processed in blocks of `LANES`, frame by frame, with the block's
 states in structure-of-arrays form so that the common path vectorises across
 pixels (AVX-512 where the CPU has it).  Each frame draws two 64-bit numbers
-per pixel, r1 and r2.  A pixel whose draws leave the common path (a ziggurat
+per pixel, r1 and r2 (a vector loop), looks up the two ziggurat layers' table
+words (a scalar loop: vector gathers cost more than twice as much per element
+on Zen 4), then runs the common path (a vector loop).  A pixel whose draws
+leave the common path (a ziggurat
 draw outside its layer's core, a Poisson draw that PD's steps I and S do
 not settle on the coarse uniform, or a mean below `PD_MIN_LAM`; about 0.5 % of
 pixel-frames at λ ≥ 1e4) is redone by the whole algorithm, which continues
