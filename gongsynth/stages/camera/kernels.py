@@ -333,6 +333,19 @@ def _complete_pd(s, r1, r2, q, photon):
     return k, z2, s
 
 
+@njit(inline="always")
+def _common(r1, r2, t1, t2, mean, slam, bigl, d, frac):
+    """(accepted, electrons, read-noise normal): the common path of both samplers for draws r1, r2."""
+    ok1, z1 = _rectangle(r1, t1)
+    ok2, z2 = _rectangle(r2, t2)
+    g = mean + slam * z1
+    n = np.floor(g)
+    diff = mean - n
+    u = np.float64(_coarse(r1, r2)) * _TO_COARSE
+    accept = ok1 & ok2 & (g >= 0.0) & ((n >= bigl) | (d * u >= diff * diff * diff))
+    return accept, n + frac, z2
+
+
 @njit(cache=True, error_model="numpy")
 def _run_block(lam, i0, lanes, seg_start, seg_snap, plane, inv_gain, sigma, photon, key0, key1, first,
                reference, acc, record):
@@ -407,23 +420,17 @@ def _run_block(lam, i0, lanes, seg_start, seg_snap, plane, inv_gain, sigma, phot
                     tw[0, l4 + 3] = _ZT[draws[0, l4 + 3] & _ZLAYER]
                     tw[1, l4 + 3] = _ZT[draws[1, l4 + 3] & _ZLAYER]
                 for lane in range(LANES):
-                    r1 = draws[0, lane]
-                    r2 = draws[1, lane]
-                    ok1, z1 = _rectangle(r1, tw[0, lane])
-                    ok2, z2 = _rectangle(r2, tw[1, lane])
-                    mean = c[_LAM, p, lane]
-                    g = mean + c[_SLAM, p, lane] * z1
-                    n = np.floor(g)
-                    diff = mean - n
-                    u = np.float64(_coarse(r1, r2)) * _TO_COARSE
-                    accept = ok1 & ok2 & (g >= 0.0) & ((n >= c[_BIGL, p, lane])
-                                                       | (c[_D, p, lane] * u >= diff * diff * diff))
-                    n += c[_FRAC, p, lane]
-                    n_out[lane] = n
-                    z_out[lane] = z2
+                    accept, n, z2 = _common(draws[0, lane], draws[1, lane], tw[0, lane], tw[1, lane],
+                                            c[_LAM, p, lane], c[_SLAM, p, lane], c[_BIGL, p, lane],
+                                            c[_D, p, lane], c[_FRAC, p, lane])
                     adu = np.int64(math.floor(n * inv_gain + sigma * z2 + 0.5))
                     acc[p, lane] += adu if accept else 0
                     flags[lane] = np.uint8(0 if accept else 1)
+                if keep:  # the variates themselves, for tests (stored here: a loop of their own is cheaper)
+                    for lane in range(LANES):
+                        _, n_out[lane], z_out[lane] = _common(
+                            draws[0, lane], draws[1, lane], tw[0, lane], tw[1, lane], c[_LAM, p, lane],
+                            c[_SLAM, p, lane], c[_BIGL, p, lane], c[_D, p, lane], c[_FRAC, p, lane])
             # The rest: the whole algorithm, continuing each pixel's stream.
             for w in range(LANES // 8):
                 mask = words[w]
