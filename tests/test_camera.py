@@ -382,3 +382,20 @@ def test_packed_ziggurat_tables_cover_the_normal_with_equal_layers(layers):
     inside = kc > 0
     assert np.all(last[inside] * words.view(np.float64)[inside] < edge[inside])
     assert kc[1] == 0 and np.mean(kc[1:] / 2**COARSE_BITS) > 1 - 20 / layers
+
+
+def test_frame_sums_are_the_rounded_recorded_variates():
+    # The kernel's accumulated ADU (its vector loop and rare paths) against the variates
+    # that the test entry point records for the same streams, rounded frame by frame.
+    from gongsynth.stages.camera.kernels import LANES, frames_kernel, sample_kernel
+
+    lam = np.resize(np.array([0.0, 3.0, 12.0, 300.0, 2e4, 1e5]), 2 * LANES + 9)
+    n_frames, key0, key1, first = 400, np.uint64(5), np.uint64(6), 3
+    inv_gain, sigma = 1 / 33, 4.8
+    n, z = sample_kernel(lam, n_frames, key0, key1, first)
+    expected = np.floor(n * inv_gain + sigma * z + 0.5).astype(np.int64).sum(axis=0)
+    out = np.empty((1, lam.size), np.int64)
+    frames_kernel(lam.reshape(1, 1, -1), np.array([0, n_frames]), np.zeros(1, np.int64),
+                  np.zeros(n_frames, np.int64), np.zeros(n_frames, np.int64), inv_gain, sigma, True,
+                  key0, key1, first, out)
+    np.testing.assert_array_equal(out[0], expected)
