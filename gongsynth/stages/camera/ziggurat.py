@@ -21,6 +21,10 @@ vectorised loop) instead of a width and a bound.  Heights then follow the
 widths (yᵢ₊₁ = yᵢ + v/xᵢ); r is chosen so that X₀ is itself such a double
 and the stack just reaches 1 (the top layer may overshoot it slightly: its
 points above the curve are rejected by the height test).
+
+The kernels freeze these tables into numba's on-disk cache, which is keyed
+on ``kernels.py``: change that file too (or clear the cache) when changing
+this one.
 """
 import math
 import struct
