@@ -12,12 +12,15 @@ around it, the default synthetic flat and dark):
 3. the ``blocks`` engine on the full detector for 10 minutes (target < 2 s);
 4. the ``frames`` engine on the full detector for 10 minutes (target < 10 min
    on 2 cores; skipped with ``--quick``);
+5. with ``--lam``, the ``frames`` engine on a uniform 64 × 256 field of each
+   given mean (unity flat, no dark), 1 minute, on one thread and on
+   ``--workers`` threads: CPU and wall ns per pixel-frame at that λ;
 
 and prints wall times, ratios and the peak resident memory of the process.
 
 Usage::
 
-    python benchmarks/bench_camera.py [--quick] [--rows 16] [--workers N]
+    python benchmarks/bench_camera.py [--quick] [--rows 16] [--workers N] [--lam 1e5 3e4]
 """
 import argparse
 import os
@@ -66,6 +69,20 @@ def numpy_loop(expected, flat, dark, duration, inst, seed):
     return (acc >> inst.truncate_bits) + (scale - 1) / (2 * scale) - (s.dither_sum / scale)[:, None, None]
 
 
+def per_lambda(lam, workers, inst, repeats=3):
+    """(CPU, wall) ns per pixel-frame of the frames engine on a uniform field of mean ``lam`` (best of 3)."""
+    field = np.full((6, 64, 256), lam) * u.electron
+    pf = field[0].size * frame_schedule(1 * u.min, inst).n_frames
+    best = (np.inf, np.inf)
+    for _ in range(repeats):
+        t0, c0 = time.perf_counter(), time.process_time()
+        integrate(field, duration=1 * u.min, engine="frames", seed=1, flat=False, dark=False, workers=workers,
+                  progress=False)
+        t, c = time.perf_counter() - t0, time.process_time() - c0
+        best = min(best[0], c / pf * 1e9), min(best[1], t / pf * 1e9)
+    return best
+
+
 def peak_rss_mb():
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
@@ -75,6 +92,7 @@ def main():
     parser.add_argument("--quick", action="store_true", help="skip the full 10-minute frames run")
     parser.add_argument("--rows", type=int, default=16, help="rows of the baseline strip")
     parser.add_argument("--workers", type=int, default=None, help="threads (default: all cores)")
+    parser.add_argument("--lam", type=float, nargs="*", default=[], help="means for the per-λ runs")
     args = parser.parse_args()
 
     inst = GONGInstrument()
@@ -130,6 +148,14 @@ def main():
               f"{ns_base * full_pf / 1e9 / t_full:.1f}x faster than the extrapolated numpy loop; "
               f"peak RSS {peak_rss_mb():.0f} MB (target < 2048 MB); load average now "
               f"{os.getloadavg()[0]:.1f}")
+
+
+    for lam in args.lam:
+        cpu1, wall1 = per_lambda(lam, 1, inst)
+        cpu, wall = per_lambda(lam, args.workers or os.cpu_count(), inst)
+        print(f"frames engine, uniform λ = {lam:g}: 1 thread {cpu1:.2f} ns CPU ({wall1:.2f} wall) per "
+              f"pixel-frame; {args.workers or os.cpu_count()} threads {wall:.2f} ns wall ({cpu:.2f} CPU); "
+              f"load average {os.getloadavg()[0]:.1f}")
 
 
 if __name__ == "__main__":

@@ -349,3 +349,53 @@ def test_vectorised_path_equals_the_whole_algorithm(photon):
     shifted = sample_kernel(lam[7:], 300, np.uint64(3), np.uint64(4), 18, photon=photon)
     np.testing.assert_array_equal(shifted[0], fast[0][:, 7:])
     np.testing.assert_array_equal(shifted[1], fast[1][:, 7:])
+
+
+@pytest.mark.parametrize("layers", [256, 2048])
+def test_packed_ziggurat_tables_cover_the_normal_with_equal_layers(layers):
+    # The conditions that make the ziggurat exact, checked on the tables themselves:
+    # equal layer areas, each layer as wide as the curve over its height, the base
+    # strip's part beyond r as large as the tail, and conservative coarse core bounds.
+    import math
+
+    from scipy import stats
+
+    from gongsynth.stages.camera.ziggurat import COARSE_BITS, ziggurat_tables
+
+    bits = 46
+    words, heights, r = ziggurat_tables(layers, bits)
+    width = words.view(np.float64) * 2.0**bits
+    kc = (words & np.uint64(2**COARSE_BITS - 1)).astype(np.int64)
+    f_r = math.exp(-0.5 * r * r)
+    tail = math.sqrt(2 * math.pi) * stats.norm.sf(r)
+    v = r * f_r + tail
+    assert width[0] * f_r == pytest.approx(v, rel=1e-14)
+    area = width[1:] * (heights[:-1] - heights[1:])
+    np.testing.assert_allclose(area, v, rtol=1e-11)
+    assert heights[0] >= 1.0 > heights[1] and heights[-1] == pytest.approx(f_r, rel=1e-15)
+    assert np.all(np.diff(heights) < 0)
+    # Width of each layer i >= 1 covers the curve at its bottom; its core ends where the curve meets its top.
+    cover = np.sqrt(-2 * np.log(heights[1:]))
+    assert np.all(width[1:] >= cover * (1 - 1e-15))
+    edge = np.concatenate([[r], np.sqrt(-2 * np.log(np.minimum(heights[:-1], 1.0)))])
+    last = (kc << (bits - COARSE_BITS)) - 1  # the widest abscissa step a coarse bound accepts
+    inside = kc > 0
+    assert np.all(last[inside] * words.view(np.float64)[inside] < edge[inside])
+    assert kc[1] == 0 and np.mean(kc[1:] / 2**COARSE_BITS) > 1 - 20 / layers
+
+
+def test_frame_sums_are_the_rounded_recorded_variates():
+    # The kernel's accumulated ADU (its vector loop and rare paths) against the variates
+    # that the test entry point records for the same streams, rounded frame by frame.
+    from gongsynth.stages.camera.kernels import LANES, frames_kernel, sample_kernel
+
+    lam = np.resize(np.array([0.0, 3.0, 12.0, 300.0, 2e4, 1e5]), 2 * LANES + 9)
+    n_frames, key0, key1, first = 400, np.uint64(5), np.uint64(6), 3
+    inv_gain, sigma = 1 / 33, 4.8
+    n, z = sample_kernel(lam, n_frames, key0, key1, first)
+    expected = np.floor(n * inv_gain + sigma * z + 0.5).astype(np.int64).sum(axis=0)
+    out = np.empty((1, lam.size), np.int64)
+    frames_kernel(lam.reshape(1, 1, -1), np.array([0, n_frames]), np.zeros(1, np.int64),
+                  np.zeros(n_frames, np.int64), np.zeros(n_frames, np.int64), inv_gain, sigma, True,
+                  key0, key1, first, out)
+    np.testing.assert_array_equal(out[0], expected)

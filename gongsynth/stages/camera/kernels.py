@@ -10,38 +10,45 @@ block or thread processes it.
 Pixels are processed in blocks of `LANES`, frame by frame, with the block's
 states in structure-of-arrays form so that the common path vectorises across
 pixels (AVX-512 where the CPU has it).  Each frame draws two 64-bit numbers
-per pixel, r1 and r2.  A pixel whose draws leave the common path (a ziggurat
-draw outside its layer's rectangle, a Poisson draw that PD's steps I and S do
-not settle on the coarse uniform, or a mean below `PD_MIN_LAM`; about 1 % of
+per pixel, r1 and r2 (a vector loop), looks up the two ziggurat layers' table
+words (a scalar loop: vector gathers cost more than twice as much per element
+on Zen 4), then runs the common path (a vector loop).  A pixel whose draws
+leave the common path (a ziggurat
+draw outside its layer's core, a Poisson draw that PD's steps I and S do
+not settle on the coarse uniform, or a mean below `PD_MIN_LAM`; about 0.5 % of
 pixel-frames at λ ≥ 1e4) is redone by the whole algorithm, which continues
 from the same two draws on the same stream, right after them.
 
 Samplers:
 
-* Normal: Marsaglia & Tsang's ziggurat (2000) with 1024 layers on one 64-bit
-  draw (layer: bits 0-9, sign: bit 10, 48-bit abscissa: bits 11-58), exact
-  wedges and tail; 0.43 % of draws fall outside their layer's rectangle.
-  z1 (Poisson) comes from r1, z2 (read noise) from r2.
+* Normal: Marsaglia & Tsang's ziggurat (2000) with 2048 layers on one 64-bit
+  draw (layer: bits 0-10, sign: bit 11, 46-bit abscissa: bits 12-57), exact
+  wedges and tail, one table word per layer (its width with a coarse core
+  bound in the low mantissa bits: `gongsynth.stages.camera.ziggurat`); 0.23 %
+  of draws fall outside their layer's core.  z1 (Poisson) comes from r1, z2
+  (read noise) from r2.
 * Poisson, mean λ ≥ `PD_MIN_LAM` (and λ = 0): Ahrens & Dieter's algorithm PD
   (1982, ACM TOMS 8, 163; the one R uses): g = λ + √λ z1, k = ⌊g⌋ is accepted
   at once if k ≥ L (step I) or after the cubic squeeze 6λ²u ≥ (λ − k)³ (step
   S); the rest is corrected exactly against the Poisson probabilities (steps
   Q, E, H; log k! by its Stirling series, |error| < 1e-12).  PD's uniform u
-  has 52 bits: the top 10 are bits 59-63 of r1 and of r2 (unused by the
-  ziggurat), the low 42 come from one more draw taken only when the top 10
-  do not settle step S.  Since u ≥ u10/1024, D·u10/1024 ≥ (λ − k)³ implies
+  has 52 bits: the top 12 are bits 58-63 of r1 and of r2 (unused by the
+  ziggurat), the low 40 come from one more draw taken only when the top 12
+  do not settle step S.  Since u ≥ u12/4096, D·u12/4096 ≥ (λ − k)³ implies
   D·u ≥ (λ − k)³ in floating point too (rounding is monotone), so the
   decision is the one the whole uniform would give: every variate is exactly
   PD's with a 52-bit uniform.
 * Poisson, 0 < λ < `PD_MIN_LAM`: inversion of the cumulative distribution
   tabulated up to λ + 10√λ + 10 (the tail beyond holds < 1e-19 and is
   renormalised away), searched from a guide table, with a 52-bit uniform
-  (top 10 bits from r1 and r2, the rest from one more draw).
+  (top 12 bits from r1 and r2, the rest from one more draw).
 """
 import math
 
 import numpy as np
 from numba import njit, prange
+
+from gongsynth.stages.camera.ziggurat import COARSE_BITS, as_float64, ziggurat_tables
 
 __all__ = ["frames_kernel", "sample_kernel", "LANES", "PD_MIN_LAM", "ZIGGURAT_R"]
 
@@ -51,16 +58,16 @@ _M1 = _U(0xBF58476D1CE4E5B9)
 _M2 = _U(0x94D049BB133111EB)
 _TO_UNIT52 = 1.0 / 4503599627370496.0  # 2**-52
 
-#: Pixels per block of the vectorised frame loop.
-LANES = 64
+#: Pixels per block of the vectorised frame loop (a multiple of 8).
+LANES = 128
 #: Means from this up (and 0) use algorithm PD, smaller ones inversion.
 PD_MIN_LAM = 10.0
 # Longest inversion table: λ + 10√λ + 10 < 51.7 for λ < 10.
 TABLE_LEN = 52
 
 # Rows of the per-block constants (N_CONST, n_planes, LANES).
-_LAM, _SLAM, _BIGL, _D, _LOGLAM, _OMEGA, _C0, _C1, _C2, _C3, _CHAT, _M, _SLOT = range(13)
-N_CONST = 13
+_LAM, _SLAM, _BIGL, _D, _LOGLAM, _OMEGA, _C0, _C1, _C2, _C3, _CHAT, _M, _SLOT, _FRAC = range(14)
+N_CONST = 14
 _INV_SQRT_2PI = 0.3989422804014327
 
 
@@ -112,57 +119,17 @@ def _uniform(s):
     return (np.float64(r >> _U(12)) + 0.5) * _TO_UNIT52, s
 
 
-def _ziggurat_constants(n):
-    """(r, v) of the n-layer normal ziggurat: base-strip edge and common layer area (bisection)."""
-    def excess(r):
-        v = r * math.exp(-0.5 * r * r) + math.sqrt(math.pi / 2) * math.erfc(r / math.sqrt(2))
-        d = r
-        for _ in range(n - 2):
-            a = v / d + math.exp(-0.5 * d * d)
-            if a >= 1.0:
-                return 1.0, v  # the layers reach the top too early: r is too small
-            d = math.sqrt(-2.0 * math.log(a))
-        return v / d + math.exp(-0.5 * d * d) - 1.0, v
-
-    lo, hi = 2.0, 6.0
-    for _ in range(100):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if excess(mid)[0] > 0 else (lo, mid)
-    return lo, excess(lo)[1]
-
-
-def _ziggurat_tables(n, bits):
-    """Marsaglia & Tsang (2000) tables for the n-layer normal ziggurat on ``bits``-bit abscissae."""
-    r, v = _ziggurat_constants(n)
-    m = 2.0**bits
-    k = np.zeros(n, np.uint64)
-    w = np.zeros(n)
-    f = np.zeros(n)
-    d = t = r
-    q = v / math.exp(-0.5 * d * d)
-    k[0] = np.uint64((d / q) * m)
-    k[1] = 0
-    w[0] = q / m
-    w[n - 1] = d / m
-    f[0] = 1.0
-    f[n - 1] = math.exp(-0.5 * d * d)
-    for i in range(n - 2, 0, -1):
-        d = math.sqrt(-2.0 * math.log(v / d + math.exp(-0.5 * d * d)))
-        k[i + 1] = np.uint64((d / t) * m)
-        t = d
-        f[i] = math.exp(-0.5 * d * d)
-        w[i] = d / m
-    return k, w, f, r
-
-
-# 1024 layers: 0.43 % of draws fall outside their layer's rectangle (2.8 % with 128).
-_ZBITS = 10
-_ZABS = 48
-_ZK, _ZW, _ZF, _ZR = _ziggurat_tables(1 << _ZBITS, _ZABS)
+# 2048 layers: 0.23 % of draws fall outside their layer's core (0.43 % with 1024, 2.8 % with 128).
+_ZBITS = 11
+_ZABS = 46
+_ZT, _ZF, _ZR = ziggurat_tables(1 << _ZBITS, _ZABS)
+assert np.all(_ZT != 0)
 #: Edge of the ziggurat's base strip: normal variates beyond it come from the exact tail.
 ZIGGURAT_R = _ZR
 _ZLAYER = _U((1 << _ZBITS) - 1)
 _ZMASK = _U((1 << _ZABS) - 1)
+_ZSHIFT = _U(_ZABS - COARSE_BITS)
+_ZLOW = _U((1 << COARSE_BITS) - 1)
 # Bits of a draw above layer, sign and abscissa: PD's coarse uniform takes them from r1 and r2.
 _SPARE = 64 - _ZBITS - 1 - _ZABS
 _COARSE = 2 * _SPARE
@@ -175,13 +142,12 @@ for _b in range(64):
 
 
 @njit(inline="always")
-def _rectangle(r):
-    """(inside, x): the ziggurat's common case for draw ``r``; x is the variate if inside."""
-    i = r & _ZLAYER
+def _rectangle(r, t):
+    """(inside, x): the ziggurat's common case for draw ``r`` and its layer's table word ``t``."""
     j = (r >> _U(_ZBITS + 1)) & _ZMASK
-    x = np.float64(j) * _ZW[i]
+    x = np.float64(j) * as_float64(t)
     x = -x if (r >> _U(_ZBITS)) & _U(1) else x
-    return j < _ZK[i], x
+    return (j >> _ZSHIFT) < (t & _ZLOW), x
 
 
 @njit(inline="always")
@@ -189,12 +155,15 @@ def _normal(s, r):
     """(standard normal variate from draw ``r``, state): continues state ``s`` if ``r`` is not enough."""
     while True:
         i = np.int64(r & _ZLAYER)
+        t = _ZT[i]
         sign = (r >> _U(_ZBITS)) & _U(1)
         j = (r >> _U(_ZBITS + 1)) & _ZMASK
-        x = np.float64(j) * _ZW[i]
-        if j < _ZK[i]:
+        x = np.float64(j) * as_float64(t)
+        if (j >> _ZSHIFT) < (t & _ZLOW):
             return (-x if sign else x), s
         if i == 0:
+            if x < _ZR:  # the base strip's core beyond its coarse bound
+                return (-x if sign else x), s
             # Tail beyond r (Marsaglia 1964).
             while True:
                 a, s = _uniform(s)
@@ -221,17 +190,25 @@ def _log_factorial(k):
 
 
 @njit(cache=True)
-def _poisson_constants(lam, c, p, lane, cdf, guide, slot):
+def _poisson_constants(lam, c, p, lane, cdf, guide, slot, photon):
     """
-    Fill ``c[:, p, lane]`` to draw Poisson variates of mean ``lam``.
+    Fill ``c[:, p, lane]`` to draw Poisson variates of mean ``lam`` (``photon``) or to give ``lam`` itself.
 
     A mean below `PD_MIN_LAM` gets its cumulative distribution in ``cdf[slot]``
     and guide table in ``guide[slot]``; its L and D are NaN so that the
     common path of `_run_block` always leaves it to the whole algorithm.  λ = 0 runs
-    through PD's constants, which give 0 on the common path.
+    through PD's constants, which give 0 on the common path.  Without
+    ``photon`` the common path's ⌊λ + 0·z1⌋ + (λ − ⌊λ⌋) is λ exactly.
     """
     c[_LAM, p, lane] = lam
     c[_M, p, lane] = 0.0
+    c[_FRAC, p, lane] = 0.0
+    if not photon:
+        c[_SLAM, p, lane] = 0.0
+        c[_BIGL, p, lane] = -np.inf
+        c[_D, p, lane] = 0.0
+        c[_FRAC, p, lane] = lam - math.floor(lam)
+        return
     if lam >= PD_MIN_LAM or lam <= 0.0:
         lam = max(lam, 0.0)
         slam = math.sqrt(lam)
@@ -323,7 +300,7 @@ def _fine(coarse, r):
     return (np.float64((coarse << _U(52 - _COARSE)) | (r >> _U(12 + _COARSE))) + 0.5) * _TO_UNIT52
 
 
-@njit(cache=True)
+@njit(inline="always")
 def _complete_pd(s, r1, r2, q, photon):
     """
     (electrons, read-noise normal, state) of one pixel-frame from its two draws, by the whole algorithm.
@@ -356,6 +333,19 @@ def _complete_pd(s, r1, r2, q, photon):
     return k, z2, s
 
 
+@njit(inline="always")
+def _common(r1, r2, t1, t2, mean, slam, bigl, d, frac):
+    """(accepted, electrons, read-noise normal): the common path of both samplers for draws r1, r2."""
+    ok1, z1 = _rectangle(r1, t1)
+    ok2, z2 = _rectangle(r2, t2)
+    g = mean + slam * z1
+    n = np.floor(g)
+    diff = mean - n
+    u = np.float64(_coarse(r1, r2)) * _TO_COARSE
+    accept = ok1 & ok2 & (g >= 0.0) & ((n >= bigl) | (d * u >= diff * diff * diff))
+    return accept, n + frac, z2
+
+
 @njit(cache=True, error_model="numpy")
 def _run_block(lam, i0, lanes, seg_start, seg_snap, plane, inv_gain, sigma, photon, key0, key1, first,
                reference, acc, record):
@@ -378,6 +368,9 @@ def _run_block(lam, i0, lanes, seg_start, seg_snap, plane, inv_gain, sigma, phot
     draws = np.empty((2, LANES), np.uint64)
     n_out = np.empty(LANES)
     z_out = np.empty(LANES)
+    flags = np.zeros(LANES, np.uint8)
+    tw = np.empty((2, LANES), np.uint64)
+    words = flags.view(np.uint64)
     keep = record.shape[0] > 0
     for j in range(seg_snap.size):
         snap = seg_snap[j]
@@ -391,72 +384,83 @@ def _run_block(lam, i0, lanes, seg_start, seg_snap, plane, inv_gain, sigma, phot
         for p in range(n_planes):
             for lane in range(LANES):
                 _poisson_constants(lam[snap, p, i0 + lane] if lane < lanes else 0.0, c, p, lane, cdf, guide,
-                                   slot)
+                                   slot, photon)
                 slot += c[_M, p, lane] > 0.0
         for k in range(seg_start[j], seg_start[j + 1]):
             p = plane[k]
-            mask = _U(0)
             if reference:
-                mask = ~mask
                 for lane in range(LANES):
                     r1, s0, s1, s2, s3 = _step(st[0, lane], st[1, lane], st[2, lane], st[3, lane])
                     r2, s0, s1, s2, s3 = _step(s0, s1, s2, s3)
                     st[0, lane], st[1, lane], st[2, lane], st[3, lane] = s0, s1, s2, s3
                     draws[0, lane] = r1
                     draws[1, lane] = r2
+                flags[:] = 1
             else:
                 # The common path of every sampler, branch-free so that it vectorises
-                # across the block; the pixels it cannot finish are marked in ``mask``.
+                # across the block; the pixels it cannot finish are flagged.
                 for lane in range(LANES):
                     r1, s0, s1, s2, s3 = _step(st[0, lane], st[1, lane], st[2, lane], st[3, lane])
                     r2, s0, s1, s2, s3 = _step(s0, s1, s2, s3)
                     st[0, lane], st[1, lane], st[2, lane], st[3, lane] = s0, s1, s2, s3
-                    ok1, z1 = _rectangle(r1)
-                    ok2, z2 = _rectangle(r2)
-                    mean = c[_LAM, p, lane]
-                    g = mean + c[_SLAM, p, lane] * z1
-                    n = np.floor(g)
-                    diff = mean - n
-                    u = np.float64(_coarse(r1, r2)) * _TO_COARSE
-                    accept = ok1 & (g >= 0.0) & ((n >= c[_BIGL, p, lane])
-                                                 | (c[_D, p, lane] * u >= diff * diff * diff))
-                    accept = (accept if photon else True) & ok2
-                    n = n if photon else mean
                     draws[0, lane] = r1
                     draws[1, lane] = r2
-                    n_out[lane] = n
-                    z_out[lane] = z2
+                # The layers' table words by scalar loads, four lanes a step: the early exit (never
+                # taken: no word is 0) keeps this loop scalar, as vector gathers cost twice as much.
+                for l4 in range(0, LANES, 4):
+                    a = _ZT[draws[0, l4] & _ZLAYER]
+                    if a == _U(0):
+                        break
+                    tw[0, l4] = a
+                    tw[1, l4] = _ZT[draws[1, l4] & _ZLAYER]
+                    tw[0, l4 + 1] = _ZT[draws[0, l4 + 1] & _ZLAYER]
+                    tw[1, l4 + 1] = _ZT[draws[1, l4 + 1] & _ZLAYER]
+                    tw[0, l4 + 2] = _ZT[draws[0, l4 + 2] & _ZLAYER]
+                    tw[1, l4 + 2] = _ZT[draws[1, l4 + 2] & _ZLAYER]
+                    tw[0, l4 + 3] = _ZT[draws[0, l4 + 3] & _ZLAYER]
+                    tw[1, l4 + 3] = _ZT[draws[1, l4 + 3] & _ZLAYER]
+                for lane in range(LANES):
+                    accept, n, z2 = _common(draws[0, lane], draws[1, lane], tw[0, lane], tw[1, lane],
+                                            c[_LAM, p, lane], c[_SLAM, p, lane], c[_BIGL, p, lane],
+                                            c[_D, p, lane], c[_FRAC, p, lane])
                     adu = np.int64(math.floor(n * inv_gain + sigma * z2 + 0.5))
                     acc[p, lane] += adu if accept else 0
-                    mask |= _U(0 if accept else 1) << _U(lane)
+                    flags[lane] = np.uint8(0 if accept else 1)
+                if keep:  # the variates themselves, for tests (stored here: a loop of their own is cheaper)
+                    for lane in range(LANES):
+                        _, n_out[lane], z_out[lane] = _common(
+                            draws[0, lane], draws[1, lane], tw[0, lane], tw[1, lane], c[_LAM, p, lane],
+                            c[_SLAM, p, lane], c[_BIGL, p, lane], c[_D, p, lane], c[_FRAC, p, lane])
             # The rest: the whole algorithm, continuing each pixel's stream.
-            while mask:
-                low = mask & (~mask + _U(1))
-                lane = _DEBRUIJN_INDEX[(low * _DEBRUIJN) >> _U(58)]
-                mask ^= low
-                s = (st[0, lane], st[1, lane], st[2, lane], st[3, lane])
-                r1 = draws[0, lane]
-                r2 = draws[1, lane]
-                m = c[_M, p, lane]
-                if photon and m > 0.0:
-                    # Inversion: the smallest n with cdf[n] >= u, searched from the guide entry.
-                    z, s = _normal(s, r2)
-                    r, s = _draw(s)
-                    u = _fine(_coarse(r1, r2), r)
-                    row = np.int64(c[_SLOT, p, lane])
-                    i = guide[row, min(np.int64(u * m), np.int64(m) - 1)]
-                    while cdf[row, i] < u:
-                        i += 1
-                    n = np.float64(i)
-                else:
-                    q = (c[0, p, lane], c[1, p, lane], c[2, p, lane], c[3, p, lane], c[4, p, lane],
-                         c[5, p, lane], c[6, p, lane], c[7, p, lane], c[8, p, lane], c[9, p, lane],
-                         c[10, p, lane])
-                    n, z, s = _complete_pd(s, r1, r2, q, photon)
-                st[0, lane], st[1, lane], st[2, lane], st[3, lane] = s
-                n_out[lane] = n
-                z_out[lane] = z
-                acc[p, lane] += np.int64(math.floor(n * inv_gain + sigma * z + 0.5))
+            for w in range(LANES // 8):
+                mask = words[w]
+                while mask:
+                    low = mask & (~mask + _U(1))
+                    lane = w * 8 + (_DEBRUIJN_INDEX[(low * _DEBRUIJN) >> _U(58)] >> 3)
+                    mask ^= low
+                    s = (st[0, lane], st[1, lane], st[2, lane], st[3, lane])
+                    r1 = draws[0, lane]
+                    r2 = draws[1, lane]
+                    m = c[_M, p, lane]
+                    if photon and m > 0.0:
+                        # Inversion: the smallest n with cdf[n] >= u, searched from the guide entry.
+                        z, s = _normal(s, r2)
+                        r, s = _draw(s)
+                        u = _fine(_coarse(r1, r2), r)
+                        row = np.int64(c[_SLOT, p, lane])
+                        i = guide[row, min(np.int64(u * m), np.int64(m) - 1)]
+                        while cdf[row, i] < u:
+                            i += 1
+                        n = np.float64(i)
+                    else:
+                        q = (c[0, p, lane], c[1, p, lane], c[2, p, lane], c[3, p, lane], c[4, p, lane],
+                             c[5, p, lane], c[6, p, lane], c[7, p, lane], c[8, p, lane], c[9, p, lane],
+                             c[10, p, lane])
+                        n, z, s = _complete_pd(s, r1, r2, q, photon)
+                    st[0, lane], st[1, lane], st[2, lane], st[3, lane] = s
+                    n_out[lane] = n
+                    z_out[lane] = z
+                    acc[p, lane] += np.int64(math.floor(n * inv_gain + sigma * z + 0.5))
             if keep:
                 for lane in range(LANES):
                     record[k, 0, lane] = n_out[lane]
