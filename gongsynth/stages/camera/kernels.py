@@ -388,24 +388,19 @@ def _run_block(lam, i0, lanes, seg_start, seg_snap, plane, inv_gain, sigma, phot
                 slot += c[_M, p, lane] > 0.0
         for k in range(seg_start[j], seg_start[j + 1]):
             p = plane[k]
+            # Two draws per pixel-frame, vectorised across the block.
+            for lane in range(LANES):
+                r1, s0, s1, s2, s3 = _step(st[0, lane], st[1, lane], st[2, lane], st[3, lane])
+                r2, s0, s1, s2, s3 = _step(s0, s1, s2, s3)
+                st[0, lane], st[1, lane], st[2, lane], st[3, lane] = s0, s1, s2, s3
+                draws[0, lane] = r1
+                draws[1, lane] = r2
             if reference:
-                for lane in range(LANES):
-                    r1, s0, s1, s2, s3 = _step(st[0, lane], st[1, lane], st[2, lane], st[3, lane])
-                    r2, s0, s1, s2, s3 = _step(s0, s1, s2, s3)
-                    st[0, lane], st[1, lane], st[2, lane], st[3, lane] = s0, s1, s2, s3
-                    draws[0, lane] = r1
-                    draws[1, lane] = r2
                 flags[:] = 1
             else:
                 # The common path of every sampler, branch-free so that it vectorises
-                # across the block; the pixels it cannot finish are flagged.
-                for lane in range(LANES):
-                    r1, s0, s1, s2, s3 = _step(st[0, lane], st[1, lane], st[2, lane], st[3, lane])
-                    r2, s0, s1, s2, s3 = _step(s0, s1, s2, s3)
-                    st[0, lane], st[1, lane], st[2, lane], st[3, lane] = s0, s1, s2, s3
-                    draws[0, lane] = r1
-                    draws[1, lane] = r2
-                # The layers' table words by scalar loads, four lanes a step: the early exit (never
+                # across the block; the pixels it cannot finish are flagged.  First the
+                # layers' table words by scalar loads, four lanes a step: the early exit (never
                 # taken: no word is 0) keeps this loop scalar, as vector gathers cost twice as much.
                 for l4 in range(0, LANES, 4):
                     a = _ZT[draws[0, l4] & _ZLAYER]

@@ -47,19 +47,17 @@ import numpy as np
 
 from gongsynth.instrument import resolve_instrument
 from gongsynth.seeding import as_seed_sequence, child_sequence
-from gongsynth.stages.channels import analyser_coefficients
-from gongsynth.stages.scene.shifts import ShiftBasis, shift_basis
+from gongsynth.stages.scene.library_layout import library_layout
+from gongsynth.stages.scene.shifts import ShiftBasis
 from gongsynth.sun.photosphere import (
     DeferredStokes,
     NiLine,
     Photosphere,
-    default_wavelength,
     model_photosphere,
 )
-from gongsynth.validation import check_quantity
 
 __all__ = ["LEVELS", "STRONG_FIELDS", "DEFAULT_THETA", "LIBRARY_SEED", "PatchLibrary", "build_library",
-           "cached_library", "cache_directory", "analyser_layout", "row_weights", "library_angles"]
+           "cached_library", "cache_directory"]
 
 #: The patch levels: name and the `model_photosphere` knobs that set them (no
 #: sunspot, no plage patches: the flux sits in network elements of
@@ -203,112 +201,6 @@ class PatchLibrary:
                 f"J={self.rank}, {self.nbytes / 2**20:.0f} MiB>")
 
 
-def analyser_layout(mueller=None):
-    """
-    How a library stores the analyser states of a global Mueller matrix.
-
-    Parameters
-    ----------
-    mueller : array_like, optional
-        A (4, 4) instrument Mueller matrix (default: identity).
-
-    Returns
-    -------
-    n_e : int
-        1 when both analyser states share their (I, Q, U) part, else 2.
-    e_index : tuple of int
-        Which stored E part each state uses.
-    v_sign : tuple of float
-        The weight of V in each state.
-    e_weights : `numpy.ndarray`
-        (n_e, 3): the weights of I, Q, U in each stored E part.
-    mirror_ok : bool
-        Whether patches may be mirrored (no state sees U).
-
-    Examples
-    --------
-    >>> n_e, e_index, v_sign, e_weights, mirror_ok = analyser_layout()
-    >>> n_e, e_index, v_sign, e_weights.tolist(), mirror_ok
-    (1, (0, 0), (1.0, -1.0), [[1.0, 0.0, 0.0]], True)
-    """
-    coeff = analyser_coefficients(mueller)
-    if coeff.ndim != 2:
-        raise ValueError("the full-disk library takes one (4, 4) Mueller matrix for the whole field")
-    e_rows = coeff[:, :3]
-    if np.array_equal(e_rows[0], e_rows[1]):
-        n_e, e_index, weights = 1, (0, 0), e_rows[:1]
-    else:
-        n_e, e_index, weights = 2, (0, 1), e_rows
-    return n_e, e_index, tuple(float(c) for c in coeff[:, 3]), weights, bool(np.all(e_rows[:, 2] == 0))
-
-
-def row_weights(basis, e_weights, ld):
-    """
-    The weights that turn Stokes spectra into a stored row's spectral part (all but B_z, B_x).
-
-    A row is, per analyser E part and for V, the continuum (the mean of the
-    first and last samples) and the basis coordinates ``E_k · (S - S_cont)``,
-    divided by the continuum limb darkening ``ld``: all linear in the Stokes
-    spectra, so a synthesis can contract each column's spectra with them
-    without storing them (`gongsynth.sun.photosphere.DeferredStokes.project`).
-
-    Parameters
-    ----------
-    basis : `~gongsynth.stages.scene.shifts.ShiftBasis`
-    e_weights : `numpy.ndarray`
-        (n_e, 3), from `analyser_layout`.
-    ld : float
-        Continuum limb darkening at the viewing angle.
-
-    Returns
-    -------
-    `numpy.ndarray`
-        (n_out, 4, nλ) float64, n_out = (n_e + 1)(J + 1): ``row[o] = Σ_s Σ_j w[o, s, j] S_s(λ_j)``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from gongsynth.stages.scene.shifts import shift_basis
-    >>> from gongsynth.sun.photosphere import default_wavelength
-    >>> basis = shift_basis(default_wavelength())
-    >>> w = row_weights(basis, analyser_layout()[3], 1.0)
-    >>> w.shape, float(w[0, 0] @ np.ones(51)), float(np.abs(w[1, 0] @ np.ones(51)))   # continuum: 1, line: 0
-    ((22, 4, 51), 1.0, 0.0)
-    """
-    lam = basis.vectors.shape[1]
-    edges = np.zeros(lam)
-    edges[[0, -1]] = 0.5
-    per_part = np.concatenate([edges[None], basis.vectors - basis.vectors.sum(axis=1)[:, None] * edges[None]])
-    stokes = [np.append(np.asarray(w, dtype=float), 0.0) for w in e_weights] + [np.array([0.0, 0, 0, 1])]
-    weights = np.concatenate([c[None, :, None] * per_part[:, None, :] for c in stokes])
-    return weights / ld
-
-
-def library_angles(theta):
-    """
-    Checked viewing angles of a library.
-
-    Parameters
-    ----------
-    theta : sequence of float
-        Deg, increasing from 0 to below 90.
-
-    Returns
-    -------
-    `numpy.ndarray`
-        float64 (n,).
-
-    Examples
-    --------
-    >>> library_angles((0, 45, 80)).tolist()
-    [0.0, 45.0, 80.0]
-    """
-    theta = np.asarray(theta, dtype=float)
-    if theta.ndim != 1 or theta.size < 2 or theta[0] != 0 or np.any(np.diff(theta) <= 0) or theta[-1] >= 90:
-        raise ValueError(f"theta must increase from 0 to below 90 deg, got {theta.tolist()}")
-    return theta
-
-
 def _project_rows(photosphere, mu, weights, wavelength, inst, line):
     """(ny, nx, n_out) float64: the spectra seen at ``mu`` from +x, contracted with ``weights``."""
     spectra = DeferredStokes(photosphere, mu=mu, los_azimuth=0 * u.deg, wavelength=wavelength,
@@ -378,25 +270,17 @@ def build_library(*, seed=0, shape=(256, 256), pixel_size=384 * u.km, seeds_per_
     >>> lib.n_levels, lib.patches.shape[::3], bool(lib.level_net[-1] > lib.level_net[0])
     (8, (4, 3), True)
     """
-    inst = resolve_instrument(instrument)
     line = NiLine() if line is None else line
-    wavelength = default_wavelength() if wavelength is None else wavelength
-    check_quantity(pixel_size, u.km, "pixel_size")
-    theta = library_angles(theta)
-    if len(seeds_per_level) != len(levels) or min(seeds_per_level) < 1:
-        raise ValueError(f"seeds_per_level needs one positive count per level ({len(levels)}), "
-                         f"got {seeds_per_level!r}")
-    n_e, e_index, v_sign, e_weights, mirror_ok = analyser_layout(mueller)
-    basis = shift_basis(wavelength, inst, max_velocity=max_velocity)
-    mu = np.cos(np.radians(theta))
-    ld = line.limb_darkening_factor(mu)
+    lay = library_layout(instrument=instrument, wavelength=wavelength, pixel_size=pixel_size, theta=theta,
+                         seeds_per_level=seeds_per_level, levels=levels, mueller=mueller,
+                         max_velocity=max_velocity, line=line)
+    inst, wavelength, theta, mu, basis, weights, k_row = (lay.instrument, lay.wavelength, lay.theta, lay.mu,
+                                                          lay.basis, lay.weights, lay.k_row)
     knobs = dict(knobs or {})
     for fixed in ("shape", "pixel_size", "seed"):
         knobs.pop(fixed, None)
     root = as_seed_sequence(seed)
-    k_row = (n_e + 1) * (basis.rank + 1) + 2
     n_spec = k_row - 2
-    weights = [row_weights(basis, e_weights, factor) for factor in ld]
     ny, nx = shape
     # (patch, y, x, angle, row): a sample's two angles are neighbours in memory.
     patches = np.empty((sum(seeds_per_level), ny, nx, theta.size, k_row), dtype=_FLOAT)
@@ -441,17 +325,18 @@ def build_library(*, seed=0, shape=(256, 256), pixel_size=384 * u.km, seeds_per_
     return PatchLibrary(patches=patches, uniform=uniform, theta=theta, level_net=net,
                         level_patches=tuple(level_patches),
                         level_uniform=tuple([-1] * len(levels) + list(range(len(strong_fields)))),
-                        pixel_size=pixel_size.to(u.km), basis=basis, n_e=n_e, e_index=e_index,
-                        v_sign=v_sign, mirror_ok=mirror_ok, line=line, meta=meta)
+                        pixel_size=pixel_size.to(u.km), basis=basis, n_e=lay.n_e, e_index=lay.e_index,
+                        v_sign=lay.v_sign, mirror_ok=lay.mirror_ok, line=line, meta=meta)
 
 
 # ---- caching: the library depends only on its arguments; building it takes ~6 s, loading < 1 s.
 
 _MEMO = {}
 # Modules whose code shapes the stored numbers: a change to any of them is a new library.
-_SOURCES = ("stages/scene/library.py", "stages/scene/shifts.py", "stages/filters.py", "stages/channels.py",
-            "sun/photosphere/model.py", "sun/photosphere/synthesis.py", "sun/photosphere/_kernel.py",
-            "sun/photosphere/line.py", "sun/photosphere/columns.py")
+_SOURCES = ("stages/scene/library.py", "stages/scene/library_layout.py", "stages/scene/shifts.py",
+            "stages/filters.py", "stages/channels.py", "sun/photosphere/model.py",
+            "sun/photosphere/synthesis.py", "sun/photosphere/_kernel.py", "sun/photosphere/line.py",
+            "sun/photosphere/columns.py")
 # ... and of the 3-D Sun's library (folders: every module in them).
 _SOURCES_3D = ("stages/scene/library_rt.py", "sun/atmosphere.py", "sun/model_atmosphere", "sun/rt")
 _ARRAYS = ("patches", "uniform", "theta", "level_net")

@@ -21,7 +21,7 @@ from the built-in 3-D Sun:
 - every patch is synthesised by `gongsynth.sun.rt.synthesize` (inclined rays
   through the periodic box) at the viewing angles ``theta`` with the observer
   toward +x, and each spectrum is stored as its continuum and Doppler-basis
-  coordinates (`gongsynth.stages.scene.library.row_weights`), divided by the
+  coordinates (`gongsynth.stages.scene.library_layout.row_weights`), divided by the
   continuum limb darkening at that angle;
 - the truth is the radiative transfer's (B·n where the line forms, the
   ``"paper"`` definition of `gongsynth.sun.rt.truth`), which depends on the
@@ -43,22 +43,14 @@ import inspect
 import astropy.units as u
 import numpy as np
 
-from gongsynth.instrument import resolve_instrument
 from gongsynth.seeding import as_seed_sequence, child_sequence
-from gongsynth.stages.scene.library import (
-    LEVELS,
-    PatchLibrary,
-    analyser_layout,
-    library_angles,
-    row_weights,
-)
-from gongsynth.stages.scene.shifts import shift_basis
+from gongsynth.stages.scene.library import LEVELS, PatchLibrary
+from gongsynth.stages.scene.library_layout import library_layout
 from gongsynth.sun.atmosphere import Atmosphere
 from gongsynth.sun.model_atmosphere import model_atmosphere
 from gongsynth.sun.model_atmosphere.builder import reference_stratifications
-from gongsynth.sun.photosphere import NiLine, default_wavelength
+from gongsynth.sun.photosphere import NiLine
 from gongsynth.sun.rt import synthesize as rt_synthesize
-from gongsynth.validation import check_quantity
 
 __all__ = ["ATMOSPHERE_LEVELS", "STRONG_COLUMNS", "ATMOSPHERE_THETA", "ATMOSPHERE_SHAPE",
            "build_atmosphere_library"]
@@ -171,24 +163,16 @@ def build_atmosphere_library(*, seed=0, shape=ATMOSPHERE_SHAPE, pixel_size=384 *
     >>> lib.n_levels, lib.patches.shape[:4], bool(lib.level_net[-1] > lib.level_net[3])
     (6, (4, 8, 8, 2), True)
     """
-    inst = resolve_instrument(instrument)
-    wavelength = default_wavelength() if wavelength is None else wavelength
-    check_quantity(pixel_size, u.km, "pixel_size")
-    theta = library_angles(theta)
-    if len(seeds_per_level) != len(levels) or min(seeds_per_level) < 1:
-        raise ValueError(f"seeds_per_level needs one positive count per level ({len(levels)}), "
-                         f"got {seeds_per_level!r}")
     line = NiLine()
-    n_e, e_index, v_sign, e_weights, mirror_ok = analyser_layout(mueller)
-    basis = shift_basis(wavelength, inst, max_velocity=max_velocity)
-    mu = np.cos(np.radians(theta))
-    ld = line.limb_darkening_factor(mu)
-    weights = [row_weights(basis, e_weights, factor) for factor in ld]
+    lay = library_layout(instrument=instrument, wavelength=wavelength, pixel_size=pixel_size, theta=theta,
+                         seeds_per_level=seeds_per_level, levels=levels, mueller=mueller,
+                         max_velocity=max_velocity, line=line)
+    wavelength, theta, mu, basis, weights, k_row = (lay.wavelength, lay.theta, lay.mu, lay.basis,
+                                                    lay.weights, lay.k_row)
     knobs = dict(knobs or {})
     for fixed in ("shape", "pixel_size", "seed", "spot"):
         knobs.pop(fixed, None)
     root = as_seed_sequence(seed)
-    k_row = (n_e + 1) * (basis.rank + 1) + 2
     n_spec = k_row - 2
     ny, nx = shape
     patches = np.zeros((sum(seeds_per_level), ny, nx, theta.size, k_row), dtype=_FLOAT)
@@ -245,5 +229,5 @@ def build_atmosphere_library(*, seed=0, shape=ATMOSPHERE_SHAPE, pixel_size=384 *
     return PatchLibrary(patches=patches, uniform=uniform, theta=theta, level_net=net,
                         level_patches=tuple(level_patches),
                         level_uniform=tuple([-1] * len(levels) + list(range(len(strong_columns)))),
-                        pixel_size=pixel_size.to(u.km), basis=basis, n_e=n_e, e_index=e_index,
-                        v_sign=v_sign, mirror_ok=mirror_ok, line=line, meta=meta)
+                        pixel_size=pixel_size.to(u.km), basis=basis, n_e=lay.n_e, e_index=lay.e_index,
+                        v_sign=lay.v_sign, mirror_ok=lay.mirror_ok, line=line, meta=meta)
