@@ -64,13 +64,19 @@ config = SimulationConfig(mode="full-disk", duration=9 * u.min, seed=1, surface_
                           instrument=instrument.replace(supersampling=3), **settings)
 quiet = gongsynth.simulate(config=config, progress=False)
 
+
+def side_by_side(panels, limit):
+    """Two magnetograms next to each other on one grey scale of ±``limit`` G."""
+    fig = plt.figure(figsize=(11, 5), layout="constrained")
+    for number, (smap, title) in enumerate(panels, 1):
+        ax = fig.add_subplot(1, 2, number, projection=smap)
+        image = smap.plot(axes=ax, norm=Normalize(-limit, limit), cmap="gray", title=title)
+    fig.colorbar(image, ax=fig.axes, label="B_LOS (G)", shrink=0.8)
+
+
 report = compare(quiet.magnetogram, real, labels=("gongsynth", "GONG Big Bear"), plot=False)
-fig = plt.figure(figsize=(11, 5), layout="constrained")
-for number, (smap, title) in enumerate(((quiet.magnetogram, "gongsynth, 2009-09-05 18:54, Big Bear"),
-                                        (real, "real GONG, Big Bear 2009-09-05 18:54")), 1):
-    ax = fig.add_subplot(1, 2, number, projection=smap)
-    image = smap.plot(axes=ax, norm=Normalize(-40, 40), cmap="gray", title=title)
-fig.colorbar(image, ax=fig.axes, label="B_LOS (G)", shrink=0.8)
+side_by_side(((quiet.magnetogram, "gongsynth, 2009-09-05 18:54, Big Bear"),
+              (real, "real GONG, Big Bear 2009-09-05 18:54")), 40)
 
 # %%
 # The numbers: the whole-disk histograms' KS distance, the noise in the
@@ -135,12 +141,8 @@ config = SimulationConfig(mode="full-disk", duration=10 * u.min, seed=2, obstime
 driven = gongsynth.simulate(config=config, surface_field=field, progress=False)
 degraded = degrade_to_gong(mdi)
 
-fig = plt.figure(figsize=(11, 5), layout="constrained")
-for number, (smap, title) in enumerate(((driven.magnetogram, "gongsynth driven by MDI 2010-10-15"),
-                                        (degraded, "MDI 2010-10-15 degraded to GONG")), 1):
-    ax = fig.add_subplot(1, 2, number, projection=smap)
-    image = smap.plot(axes=ax, norm=Normalize(-100, 100), cmap="gray", title=title)
-fig.colorbar(image, ax=fig.axes, label="B_LOS (G)", shrink=0.8)
+side_by_side(((driven.magnetogram, "gongsynth driven by MDI 2010-10-15"),
+              (degraded, "MDI 2010-10-15 degraded to GONG")), 100)
 
 # %%
 # The large-scale pixel correlation: the degraded MDI map is read at the
