@@ -72,7 +72,7 @@ _DOCS = {
     "dark_file": "a user-supplied dark: its FITS path, or '<array>' (unset: the synthetic dark)",
     "dark_sha256": "SHA-256 of that dark, checked when the run is repeated",
     "site": f"the observer's ground site, a GONG site {sorted(GONG_SITES)}; unset: the Earth's centre",
-    "like": "a real GONG full-disk FITS file whose date, site and plate scale the run takes",
+    "like": "a real GONG full-disk FITS file whose date, site, plate scale and pointing the run takes",
 }
 
 
