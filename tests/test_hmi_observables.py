@@ -41,8 +41,8 @@ FWHM = HMI.reference_line_fwhm.to_value(MA)
 def zeeman_shift(b_gauss, g=2.5):
     """Δλ_B = e λ0² g B / (4π m_e c²) in mÅ (Gaussian units)."""
     lam = HMI.line_wavelength.to_value(u.cm)
-    cm = const.e.gauss.value * lam**2 * g * b_gauss / (4 * math.pi * const.m_e.cgs.value * const.c.cgs.value**2)
-    return cm * 1e11
+    m_c2 = const.m_e.cgs.value * const.c.cgs.value**2
+    return const.e.gauss.value * lam**2 * g * b_gauss / (4 * math.pi * m_c2) * 1e11
 
 
 def triplet(v, b, gamma=0.0, depth=DEPTH, fwhm=FWHM):
