@@ -57,7 +57,9 @@ __all__ = ["LookupTable", "lookup_table", "fourier_coefficients", "raw_velocitie
            "filtergram_weights", "gaussian_line", "line_parameters", "reduce_hmi"]
 
 _mA = u.Unit("mAA")
+_BLOCK = 1 << 18  # pixels reduced at a time
 _THETA = 2 * math.pi * np.asarray(TUNING_INDICES) / N_TUNINGS  # θ_k = 2π δ_k / T
+_HARMONICS = np.stack([np.cos(_THETA), np.sin(_THETA), np.cos(2 * _THETA), np.sin(2 * _THETA)])
 
 
 def fourier_coefficients(intensities, harmonic=1):
@@ -82,10 +84,16 @@ def fourier_coefficients(intensities, harmonic=1):
     >>> bool(abs(a) < 1e-12 and abs(b) < 1e-12)
     True
     """
+    if harmonic not in (1, 2):
+        raise ValueError(f"harmonic must be 1 or 2, got {harmonic!r}")
+    a, b = _harmonics(intensities)[2 * harmonic - 2:2 * harmonic]
+    return a, b
+
+
+def _harmonics(intensities):
+    """(a1, b1, a2, b2) stacked, shape (4, ...), by one matrix product."""
     data = np.asarray(intensities, dtype=float)
-    cos = np.cos(harmonic * _THETA).reshape((N_TUNINGS,) + (1,) * (data.ndim - 1))
-    sin = np.sin(harmonic * _THETA).reshape(cos.shape)
-    return (cos * data).sum(axis=0), (sin * data).sum(axis=0)
+    return np.tensordot(_HARMONICS, data, axes=1)
 
 
 def raw_velocities(intensities, instrument=None):
@@ -103,12 +111,17 @@ def raw_velocities(intensities, instrument=None):
     v1, v2, phase1 : `numpy.ndarray`
         v1 and v2 in m/s (positive = redshift), phase1 = atan2(−b1, −a1) in rad.
     """
-    inst = resolve_hmi(instrument)
+    return _velocities(_harmonics(intensities), resolve_hmi(instrument))
+
+
+def _velocities(harmonics, inst, second=True):
+    """`raw_velocities` from the stacked Fourier coefficients (v2 None unless ``second``)."""
     per_rad = _velocity_per_radian(inst)
-    a1, b1 = fourier_coefficients(intensities, 1)
-    a2, b2 = fourier_coefficients(intensities, 2)
+    a1, b1, a2, b2 = harmonics
     phase1 = np.arctan2(-b1, -a1)
     v1 = phase1 * per_rad
+    if not second:
+        return v1, None, phase1
     v2 = np.arctan2(-b2, -a2) * per_rad / 2
     period2 = math.pi * per_rad  # the second harmonic's velocity period
     v2 = v1 + np.mod(v2 - v1 + period2 / 2, period2) - period2 / 2
@@ -309,20 +322,26 @@ def line_parameters(intensities, instrument=None):
     """
     inst = resolve_hmi(instrument)
     data = np.asarray(intensities, dtype=float)
-    period = inst.tuning_period.to_value(_mA)
-    f1 = np.hypot(*fourier_coefficients(data, 1)) * 2 / N_TUNINGS
-    f2 = np.hypot(*fourier_coefficients(data, 2)) * 2 / N_TUNINGS
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = np.log(f1 / f2)
-        sigma = np.where(ratio > 0, period / math.pi * np.sqrt(np.abs(ratio) / 3), np.nan)
-        depth = period * f1 / (2 * sigma * math.sqrt(math.pi)) * np.exp((math.pi * sigma / period) ** 2)
-    v1, _, _ = raw_velocities(data, inst)
-    centre = v1 / inst.velocity_per_wavelength.to_value(u.m / u.s / _mA)
-    delta = inst.tuning_offsets.to_value(_mA).reshape((N_TUNINGS,) + (1,) * (data.ndim - 1))
-    with np.errstate(invalid="ignore"):
-        continuum = np.mean(data + depth * np.exp(-((delta - centre) / sigma) ** 2), axis=0)
-    continuum = np.where(np.isfinite(continuum), continuum, data.mean(axis=0))
+    harmonics = _harmonics(data)
+    sigma, depth, continuum = _line_parameters(data, harmonics, _velocities(harmonics, inst, False)[0], inst)
     return u.Quantity(2 * math.sqrt(math.log(2)) * sigma, _mA), depth, continuum
+
+
+def _line_parameters(data, harmonics, v1, inst):
+    """σ (mÅ), depth and continuum of `line_parameters` from precomputed coefficients."""
+    period = inst.tuning_period.to_value(_mA)
+    a1, b1, a2, b2 = harmonics
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = 0.5 * np.log((a1**2 + b1**2) / (a2**2 + b2**2))   # ln(|F1| / |F2|)
+        sigma = np.where(ratio > 0, period / math.pi * np.sqrt(np.abs(ratio) / 3), np.nan)
+        f1 = np.hypot(a1, b1) * 2 / N_TUNINGS
+        depth = period * f1 / (2 * sigma * math.sqrt(math.pi)) * np.exp((math.pi * sigma / period) ** 2)
+        centre = v1 / inst.velocity_per_wavelength.to_value(u.m / u.s / _mA)
+        continuum = data.mean(axis=0)
+        for delta in inst.tuning_offsets.to_value(_mA):
+            continuum = continuum + depth * np.exp(-((delta - centre) / sigma) ** 2) / N_TUNINGS
+    continuum = np.where(np.isfinite(continuum), continuum, data.mean(axis=0))
+    return sigma, depth, continuum
 
 
 def reduce_hmi(planes, instrument=None):
@@ -357,22 +376,30 @@ def reduce_hmi(planes, instrument=None):
     """
     inst = resolve_hmi(instrument)
     data, unit = _split(planes)
+    shape = data.shape[1:]
+    flat = data.reshape(N_HMI_PLANES, -1)
     table = lookup_table(inst)
-    velocity, phase, wrapped, continuum = [], [], False, 0.0
-    for pol in (0, 1):
-        part = data[pol * N_TUNINGS:(pol + 1) * N_TUNINGS]
-        v1, _, phase1 = raw_velocities(part, inst)
-        v, outside = table.correct(v1, 1)
-        velocity.append(v)
-        phase.append(phase1)
-        wrapped = wrapped | outside
-        continuum = continuum + line_parameters(part, inst)[2] / 2
+    gauss = inst.gauss_per_velocity.to_value(u.G * u.s / u.m)
+    velocity = np.empty((2, flat.shape[1]))
+    phase = np.empty_like(velocity)
+    wrapped = np.zeros(flat.shape[1], dtype=bool)
+    continuum = np.zeros(flat.shape[1])
+    # Blocks of pixels bound the temporaries (a 4096² frame is 16.8 M pixels).
+    for start in range(0, flat.shape[1], _BLOCK):
+        block = slice(start, start + _BLOCK)
+        for pol in (0, 1):
+            part = flat[pol * N_TUNINGS:(pol + 1) * N_TUNINGS, block]
+            harmonics = _harmonics(part)
+            v1, _, phase[pol, block] = _velocities(harmonics, inst, second=False)
+            velocity[pol, block], outside = table.correct(v1, 1)
+            wrapped[block] |= outside
+            continuum[block] += _line_parameters(part, harmonics, v1, inst)[2] / 2
     v_lcp, v_rcp = velocity
     return Observables(
-        magnetogram=u.Quantity((v_lcp - v_rcp) * inst.gauss_per_velocity.to_value(u.G * u.s / u.m), u.G),
-        doppler=u.Quantity((v_lcp + v_rcp) / 2, u.m / u.s),
-        continuum=u.Quantity(continuum, unit),
-        velocity=u.Quantity(np.stack(velocity), u.m / u.s),
-        phase=u.Quantity(np.stack(phase), u.rad),
-        wrapped=np.asarray(wrapped),
+        magnetogram=u.Quantity(((v_lcp - v_rcp) * gauss).reshape(shape), u.G),
+        doppler=u.Quantity(((v_lcp + v_rcp) / 2).reshape(shape), u.m / u.s),
+        continuum=u.Quantity(continuum.reshape(shape), unit),
+        velocity=u.Quantity(velocity.reshape((2,) + shape), u.m / u.s),
+        phase=u.Quantity(phase.reshape((2,) + shape), u.rad),
+        wrapped=wrapped.reshape(shape),
     )
