@@ -14,7 +14,8 @@ from gongsynth.instruments.hmi.filters import (
     fixed_transmission,
     profile_width,
 )
-from gongsynth.instruments.hmi.observables import filtergram_weights, gaussian_line
+from gongsynth.instruments.hmi.observables import filtergram_weights
+from gongsynth.instruments.hmi.profiles import gaussian_line
 
 MA = u.Unit("mAA")
 

@@ -7,7 +7,6 @@ triplet, g = 2.5), independent of gongsynth.sun.
 """
 import math
 
-import astropy.constants as const
 import astropy.units as u
 import numpy as np
 import pytest
@@ -21,12 +20,8 @@ from gongsynth.instruments.hmi.noise import (
     magnetogram_noise,
     sequence_weights,
 )
-from gongsynth.instruments.hmi.observables import (
-    filtergram_weights,
-    gaussian_line,
-    line_parameters,
-    raw_velocities,
-)
+from gongsynth.instruments.hmi.observables import filtergram_weights, line_parameters, raw_velocities
+from gongsynth.instruments.hmi.profiles import gaussian_line, zeeman_shift, zeeman_triplet
 from gongsynth.stages.reduction import Observables
 
 MA = u.Unit("mAA")
@@ -38,25 +33,10 @@ DEPTH = HMI.reference_line_depth.to_value(u.one)
 FWHM = HMI.reference_line_fwhm.to_value(MA)
 
 
-def zeeman_shift(b_gauss, g=2.5):
-    """Δλ_B = e λ0² g B / (4π m_e c²) in mÅ (Gaussian units)."""
-    lam = HMI.line_wavelength.to_value(u.cm)
-    m_c2 = const.m_e.cgs.value * const.c.cgs.value**2
-    return const.e.gauss.value * lam**2 * g * b_gauss / (4 * math.pi * m_c2) * 1e11
-
-
 def triplet(v, b, gamma=0.0, depth=DEPTH, fwhm=FWHM):
-    """
-    I and V of a weak normal triplet: Gaussian π and σ components of the given line.
-
-    I = 1 − d [φ_π sin²γ/2 + (φ_b + φ_r)(1 + cos²γ)/4], V = d cosγ (φ_b − φ_r)/2 with
-    φ_b,r centred at ∓Δλ_B: for B > 0 this is gongsynth's V ≈ −Δλ_B cosγ dI/dλ.
-    """
-    shift, split = v / PER_MA, zeeman_shift(b)
-    pi, blue, red = (1 - gaussian_line(X, 1, fwhm, shift + s) for s in (0, -split, split))
-    stokes_i = 1 - depth * (pi * math.sin(gamma) ** 2 / 2 + (blue + red) * (1 + math.cos(gamma) ** 2) / 4)
-    stokes_v = depth * math.cos(gamma) * (blue - red) / 2
-    return stokes_i, stokes_v
+    """I and V of a triplet of the given line (g = 2.5) at velocity v (m/s) and field b (G)."""
+    split = zeeman_shift(b * u.G, 2.5, HMI.line_wavelength).to_value(MA)
+    return zeeman_triplet(X, v / PER_MA, split, gamma, depth, fwhm)
 
 
 def observe(stokes_i, stokes_v):
@@ -112,7 +92,7 @@ def test_field_linear_below_saturation(v):
 def test_saturation_with_large_doppler_shift():
     # v_LCP = v + c Δλ_B/λ0 leaves the table (±9.6 km/s) when B > (9.6 km/s − |v|)/(2.16 m/s/G):
     # 3055 G at |v| = 3 km/s, 4444 G at rest (the cap of real hmi.M_45s files).
-    per_gauss = zeeman_shift(1.0) * PER_MA
+    per_gauss = zeeman_shift(1 * u.G, 2.5, HMI.line_wavelength).to_value(MA) * PER_MA
     vmax = HMI.lut_velocity_max.to_value(u.m / u.s)
     onset = (vmax - 3000.0) / per_gauss
     assert onset == pytest.approx(3055, abs=2)
@@ -134,7 +114,7 @@ def test_positive_field_gives_positive_magnetogram():
     # the observer), computed by finite differences: independent of `triplet`.
     stokes_i = gaussian_line(X, DEPTH, FWHM)
     for b in (20.0, -20.0):
-        stokes_v = -zeeman_shift(b) * np.gradient(stokes_i, X)
+        stokes_v = -zeeman_shift(b * u.G, 2.5, HMI.line_wavelength).to_value(MA) * np.gradient(stokes_i, X)
         measured = reduce_hmi(observe(stokes_i, stokes_v)[:, None]).magnetogram.to_value(u.G)[0]
         assert np.sign(measured) == np.sign(b)
         assert measured == pytest.approx(b, rel=0.01)

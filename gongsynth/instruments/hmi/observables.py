@@ -50,11 +50,12 @@ import numpy as np
 
 from gongsynth.instruments.hmi.filters import filter_quadrature
 from gongsynth.instruments.hmi.parameters import N_HMI_PLANES, N_TUNINGS, TUNING_INDICES, resolve_hmi
+from gongsynth.instruments.hmi.profiles import gaussian_line
 from gongsynth.stages.reduction import Observables
 from gongsynth.validation import check_finite, check_quantity
 
 __all__ = ["LookupTable", "lookup_table", "fourier_coefficients", "raw_velocities",
-           "filtergram_weights", "gaussian_line", "line_parameters", "reduce_hmi"]
+           "filtergram_weights", "line_parameters", "reduce_hmi"]
 
 _mA = u.Unit("mAA")
 _BLOCK = 1 << 18  # pixels reduced at a time
@@ -131,25 +132,6 @@ def _velocities(harmonics, inst, second=True):
 def _velocity_per_radian(inst):
     """(c / λ0) T / (2π) in m/s per radian."""
     return float((inst.velocity_per_wavelength * inst.tuning_period).to_value(u.m / u.s)) / (2 * math.pi)
-
-
-def gaussian_line(offset, depth, fwhm, shift=0.0):
-    """
-    Normalised Gaussian absorption line 1 − d exp(−(x − x_s)²/σ²), σ = FWHM / (2√ln2).
-
-    Parameters
-    ----------
-    offset : array_like
-        λ − λ0 (same unit as ``fwhm`` and ``shift``).
-    depth, fwhm, shift : float or array_like
-        Broadcast against ``offset``.
-
-    Returns
-    -------
-    `numpy.ndarray`
-    """
-    sigma = np.asarray(fwhm) / (2 * math.sqrt(math.log(2)))
-    return 1 - np.asarray(depth) * np.exp(-((np.asarray(offset) - shift) / sigma) ** 2)
 
 
 @dataclasses.dataclass(frozen=True)
