@@ -11,7 +11,7 @@ import astropy.units as u
 import numpy as np
 import pytest
 
-from gongsynth.instruments.hmi import HMIInstrument, lookup_table, reduce_hmi
+from gongsynth.instruments.hmi import HMIInstrument
 from gongsynth.instruments.hmi.noise import (
     CONTINUUM_COUNT_RATE,
     LIU_2012_NOISE,
@@ -20,7 +20,13 @@ from gongsynth.instruments.hmi.noise import (
     magnetogram_noise,
     sequence_weights,
 )
-from gongsynth.instruments.hmi.observables import filtergram_weights, line_parameters, raw_velocities
+from gongsynth.instruments.hmi.observables import (
+    filtergram_weights,
+    line_parameters,
+    lookup_table,
+    raw_velocities,
+    reduce_hmi,
+)
 from gongsynth.instruments.hmi.profiles import gaussian_line, zeeman_shift, zeeman_triplet
 from gongsynth.stages.reduction import Observables
 

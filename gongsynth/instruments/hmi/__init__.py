@@ -1,14 +1,16 @@
 """
 SDO/HMI as an instrument of gongsynth's family.
 
-`HMIInstrument` holds every parameter (with its source); `filters` the
-transmission of the six tuning positions; `observables` the MDI-like
-reduction (`reduce_hmi`); `noise` the photon budget and magnetogram noise.
-See the Instruments guide page ``instrument_hmi``.
+`HMIInstrument` holds every parameter (with its source) and
+`filtergram_responses` the transmission of the six tuning positions
+(`gongsynth.instruments.hmi.filters`); both sit early in the data flow, beside
+the other instruments' parameters.  The reduction, which needs
+`gongsynth.stages.reduction`, is imported from its own modules:
+`gongsynth.instruments.hmi.observables.reduce_hmi` (the MDI-like algorithm)
+and `gongsynth.instruments.hmi.noise` (photon budget and magnetogram noise).
+See the guide page ``instrument_hmi``.
 """
 from gongsynth.instruments.hmi.filters import filtergram_responses
-from gongsynth.instruments.hmi.noise import magnetogram_noise
-from gongsynth.instruments.hmi.observables import lookup_table, reduce_hmi
 from gongsynth.instruments.hmi.parameters import (
     N_HMI_PLANES,
     N_TUNINGS,
@@ -16,5 +18,4 @@ from gongsynth.instruments.hmi.parameters import (
     resolve_hmi,
 )
 
-__all__ = ["HMIInstrument", "N_HMI_PLANES", "N_TUNINGS", "resolve_hmi", "filtergram_responses",
-           "reduce_hmi", "lookup_table", "magnetogram_noise"]
+__all__ = ["HMIInstrument", "N_HMI_PLANES", "N_TUNINGS", "resolve_hmi", "filtergram_responses"]

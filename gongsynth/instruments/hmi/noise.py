@@ -28,7 +28,7 @@ import astropy.units as u
 import numpy as np
 
 from gongsynth.instruments.hmi.filters import filter_quadrature
-from gongsynth.instruments.hmi.observables import _reference_filtergrams, reduce_hmi
+from gongsynth.instruments.hmi.observables import reduce_hmi, reference_filtergrams
 from gongsynth.instruments.hmi.parameters import N_TUNINGS, resolve_hmi
 
 __all__ = ["CONTINUUM_COUNT_RATE", "CONTINUUM_INTENSITY", "LIU_2012_NOISE", "continuum_electrons",
@@ -178,7 +178,7 @@ def magnetogram_noise(product="45s", instrument=None, *, method="analytic", n_tr
     """
     inst = resolve_hmi(instrument)
     _, weights = sequence_weights(product, inst)
-    line = _reference_filtergrams(inst, np.zeros(1))[:, 0]  # relative to the continuum
+    line = reference_filtergrams(0.0, inst)[:, 0]  # relative to the continuum
     electrons = continuum_electrons(inst).value * line / _filter_widths(inst)
     mean = np.concatenate([electrons, electrons])            # LCP and RCP alike
     read = (inst.read_noise * inst.gain).to_value(u.electron)

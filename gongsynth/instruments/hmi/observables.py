@@ -54,7 +54,7 @@ from gongsynth.instruments.hmi.profiles import gaussian_line
 from gongsynth.stages.reduction import Observables
 from gongsynth.validation import check_finite, check_quantity
 
-__all__ = ["LookupTable", "lookup_table", "fourier_coefficients", "raw_velocities",
+__all__ = ["LookupTable", "lookup_table", "reference_filtergrams", "fourier_coefficients", "raw_velocities",
            "filtergram_weights", "line_parameters", "reduce_hmi"]
 
 _mA = u.Unit("mAA")
@@ -214,13 +214,28 @@ def lookup_table(instrument=None):
     n = int(round(vmax / step))
     velocity = step * np.arange(-n, n + 1)
     shift = velocity / inst.velocity_per_wavelength.to_value(u.m / u.s / _mA)
-    filtergrams = _reference_filtergrams(inst, shift)  # (6, nv)
+    filtergrams = reference_filtergrams(shift, inst)  # (6, nv)
     raw1, raw2, _ = raw_velocities(filtergrams, inst)
     return LookupTable(velocity, raw1, raw2, _monotonic_branch(raw1, n), _monotonic_branch(raw2, n))
 
 
-def _reference_filtergrams(inst, shift):
-    """Filtergrams (6, n) of the reference line shifted by ``shift`` (mÅ, shape (n,))."""
+def reference_filtergrams(shift, instrument=None):
+    """
+    Filtergrams of the reference line Doppler-shifted by ``shift``, relative to the continuum.
+
+    Parameters
+    ----------
+    shift : array_like
+        Shifts λ_line − λ0 in mÅ, shape (n,).
+    instrument : `~gongsynth.instruments.hmi.HMIInstrument`, optional
+
+    Returns
+    -------
+    `numpy.ndarray`
+        Shape (6, n), in mÅ (∫ R_k I dλ for a unit continuum).
+    """
+    inst = resolve_hmi(instrument)
+    shift = np.atleast_1d(np.asarray(shift, dtype=float))
     offset, weights, responses = filter_quadrature(inst)
     depth = inst.reference_line_depth.to_value(u.one)
     fwhm = inst.reference_line_fwhm.to_value(_mA)
