@@ -22,7 +22,7 @@ PACKAGE = Path(gongsynth.__file__).parent
 LAYERS = (
     ("gongsynth.version", "gongsynth._version", "gongsynth.optional", "gongsynth.validation",
      "gongsynth.seeding", "gongsynth.planes", "gongsynth.files", "gongsynth.tomlfmt",
-     "gongsynth.instrument", "gongsynth.geometry", "gongsynth.observing"),
+     "gongsynth.instrument", "gongsynth.geometry", "gongsynth.observing", "gongsynth.instruments"),
     ("gongsynth.sun.rt.atomic_data", "gongsynth.sun.rt.eos", "gongsynth.sun.rt.opacity",
      "gongsynth.sun.rt.hydrostatic"),
     ("gongsynth.sun", "gongsynth.sun.atmosphere_files", "gongsynth.sun.atmosphere",
@@ -35,7 +35,9 @@ LAYERS = (
     ("gongsynth.stages.scene",),
     ("gongsynth.stages.optics", "gongsynth.stages.psf", "gongsynth.stages.imagers"),
     ("gongsynth.stages.camera",),
-    ("gongsynth.stages.reduction",),
+    # An instrument's reduction algorithm returns the shared stage's Observables.
+    ("gongsynth.stages.reduction", "gongsynth.instruments.hmi.observables",
+     "gongsynth.instruments.hmi.noise"),
     ("gongsynth.products",),
     ("gongsynth.analysis",),
     ("gongsynth.suns", "gongsynth.config", "gongsynth.chain", "gongsynth.resources", "gongsynth.pipeline",
