@@ -28,9 +28,9 @@ import numpy as np
 from scipy.signal import argrelmax
 
 from gongsynth.instruments.hmi import HMIInstrument
-from gongsynth.instruments.hmi.filters import filter_quadrature, profile_width
+from gongsynth.instruments.hmi.filters import filter_quadrature, filtergram_weights, profile_width
 from gongsynth.instruments.hmi.noise import LIU_2012_NOISE, magnetogram_noise
-from gongsynth.instruments.hmi.observables import filtergram_weights, lookup_table, reduce_hmi
+from gongsynth.instruments.hmi.observables import lookup_table, reduce_hmi
 from gongsynth.instruments.hmi.profiles import gaussian_line, zeeman_shift, zeeman_triplet
 
 MA = u.Unit("mAA")

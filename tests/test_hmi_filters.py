@@ -11,10 +11,10 @@ from gongsynth.instruments.hmi.filters import (
     element_transmission,
     filter_quadrature,
     filtergram_responses,
+    filtergram_weights,
     fixed_transmission,
     profile_width,
 )
-from gongsynth.instruments.hmi.observables import filtergram_weights
 from gongsynth.instruments.hmi.profiles import gaussian_line
 
 MA = u.Unit("mAA")

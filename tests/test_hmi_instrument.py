@@ -19,6 +19,10 @@ def test_contract_attributes():
                  "exposure_time", "integration_half_width", "quadrature_step"):
         assert isinstance(getattr(hmi, name), u.Quantity)
     assert isinstance(hmi.supersampling, int) and isinstance(hmi.adc_bits, int)
+    responses = hmi.responses(hmi.line_wavelength + hmi.tuning_offsets)
+    assert responses.unit == u.one and responses.shape == (6, 6)
+    # Each filtergram transmits most at its own tuning position.
+    np.testing.assert_array_equal(np.argmax(responses.value, axis=1), np.arange(6))
 
 
 def test_every_field_has_a_source():

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from gongsynth.instruments.hmi import HMIInstrument
+from gongsynth.instruments.hmi.filters import filtergram_weights
 from gongsynth.instruments.hmi.noise import (
     CONTINUUM_COUNT_RATE,
     LIU_2012_NOISE,
@@ -21,7 +22,6 @@ from gongsynth.instruments.hmi.noise import (
     sequence_weights,
 )
 from gongsynth.instruments.hmi.observables import (
-    filtergram_weights,
     line_parameters,
     lookup_table,
     raw_velocities,

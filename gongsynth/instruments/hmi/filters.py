@@ -36,7 +36,7 @@ from gongsynth.instruments.hmi.parameters import N_TUNINGS, resolve_hmi
 from gongsynth.validation import check_quantity
 
 __all__ = ["element_transmission", "bandpass_transmission", "fixed_transmission",
-           "filtergram_responses", "filter_quadrature", "profile_width"]
+           "filtergram_responses", "filter_quadrature", "filtergram_weights", "profile_width"]
 
 
 def _mA(wavelength, name="wavelength"):
@@ -193,6 +193,43 @@ def filter_quadrature(inst):
     weights = np.full(n, offset[1] - offset[0])
     weights[[0, -1]] /= 2
     return offset, weights, _responses(offset, inst)
+
+
+def filtergram_weights(wavelength, instrument=None):
+    r"""
+    Quadrature weights that integrate sampled spectra against the six filtergrams.
+
+    For spectra :math:`S_j` on ``wavelength`` (increasing, possibly
+    non-uniform), :math:`\sum_j W_{kj} S_j = \int R_k(\lambda) S(\lambda)\,d\lambda`,
+    with S the piecewise-linear interpolant of the samples, extended by its
+    edge values (the continuum) over λ0 ± ``integration_half_width``.
+
+    Parameters
+    ----------
+    wavelength : `~astropy.units.Quantity`
+        Shape (nλ,), at least two points.
+    instrument : `~gongsynth.instruments.hmi.HMIInstrument`, optional
+
+    Returns
+    -------
+    `~astropy.units.Quantity`
+        Shape (6, nλ), in mÅ.
+    """
+    inst = resolve_hmi(instrument)
+    lam = check_quantity(wavelength, u.nm, "wavelength")
+    x = (lam - inst.line_wavelength).to_value(u.Unit("mAA"))
+    if x.ndim != 1 or x.size < 2 or np.any(np.diff(x) <= 0):
+        raise ValueError("wavelength must be a strictly increasing 1-D grid of at least two points")
+    offset, weights, responses = filter_quadrature(inst)
+    q = np.clip(offset, x[0], x[-1])
+    j = np.clip(np.searchsorted(x, q) - 1, 0, x.size - 2)
+    frac = (q - x[j]) / (x[j + 1] - x[j])
+    out = np.zeros((N_TUNINGS, x.size))
+    wr = responses * weights
+    for k in range(N_TUNINGS):
+        np.add.at(out[k], j, wr[k] * (1 - frac))
+        np.add.at(out[k], j + 1, wr[k] * frac)
+    return u.Quantity(out, u.Unit("mAA"))
 
 
 def profile_width(offset, profile):

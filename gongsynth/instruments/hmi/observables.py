@@ -52,10 +52,10 @@ from gongsynth.instruments.hmi.filters import filter_quadrature
 from gongsynth.instruments.hmi.parameters import N_HMI_PLANES, N_TUNINGS, TUNING_INDICES, resolve_hmi
 from gongsynth.instruments.hmi.profiles import gaussian_line
 from gongsynth.stages.reduction import Observables
-from gongsynth.validation import check_finite, check_quantity
+from gongsynth.validation import check_finite
 
 __all__ = ["LookupTable", "lookup_table", "reference_filtergrams", "fourier_coefficients", "raw_velocities",
-           "filtergram_weights", "line_parameters", "reduce_hmi"]
+           "line_parameters", "reduce_hmi"]
 
 _mA = u.Unit("mAA")
 _BLOCK = 1 << 18  # pixels reduced at a time
@@ -244,43 +244,6 @@ def reference_filtergrams(shift, instrument=None):
     kernel = responses[:, near] * weights[near]
     dip = 1 - gaussian_line(offset[near][None, :], depth, fwhm, np.asarray(shift)[:, None])
     return (responses @ weights)[:, None] - kernel @ dip.T
-
-
-def filtergram_weights(wavelength, instrument=None):
-    r"""
-    Quadrature weights that integrate sampled spectra against the six filtergrams.
-
-    For spectra :math:`S_j` on ``wavelength`` (increasing, possibly
-    non-uniform), :math:`\sum_j W_{kj} S_j = \int R_k(\lambda) S(\lambda)\,d\lambda`,
-    with S the piecewise-linear interpolant of the samples, extended by its
-    edge values (the continuum) over λ0 ± ``integration_half_width``.
-
-    Parameters
-    ----------
-    wavelength : `~astropy.units.Quantity`
-        Shape (nλ,), at least two points.
-    instrument : `~gongsynth.instruments.hmi.HMIInstrument`, optional
-
-    Returns
-    -------
-    `~astropy.units.Quantity`
-        Shape (6, nλ), in mÅ.
-    """
-    inst = resolve_hmi(instrument)
-    lam = check_quantity(wavelength, u.nm, "wavelength")
-    x = (lam - inst.line_wavelength).to_value(_mA)
-    if x.ndim != 1 or x.size < 2 or np.any(np.diff(x) <= 0):
-        raise ValueError("wavelength must be a strictly increasing 1-D grid of at least two points")
-    offset, weights, responses = filter_quadrature(inst)
-    q = np.clip(offset, x[0], x[-1])
-    j = np.clip(np.searchsorted(x, q) - 1, 0, x.size - 2)
-    frac = (q - x[j]) / (x[j + 1] - x[j])
-    out = np.zeros((N_TUNINGS, x.size))
-    wr = responses * weights
-    for k in range(N_TUNINGS):
-        np.add.at(out[k], j, wr[k] * (1 - frac))
-        np.add.at(out[k], j + 1, wr[k] * frac)
-    return u.Quantity(out, _mA)
 
 
 def _split(planes):

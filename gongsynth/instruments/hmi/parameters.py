@@ -68,8 +68,8 @@ class HMIInstrument:
     use `replace` to derive a modified instrument.  Each field's source is in
     ``HMIInstrument.source(name)`` and in the Instruments guide.
 
-    Raw planes
-    ----------
+    Notes
+    -----
     One LOS sequence is 12 filtergrams: plane = polarisation × 6 + tuning, with
     polarisation 0 = LCP = I+V and 1 = RCP = I−V (the HMI code's labels) and
     tuning 0..5 = HMI's I0..I5 at +172, +103.2, +34.4, −34.4, −103.2, −172 mÅ.
