@@ -27,7 +27,6 @@ from pathlib import Path
 
 import astropy.units as u
 import matplotlib.pyplot as plt
-import numpy as np
 import sunpy.map
 
 import gongsynth

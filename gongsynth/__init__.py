@@ -99,5 +99,6 @@ def __dir__():
 
 __all__ = ["Atmosphere", "GONGInstrument", "GONGSynthMap", "SimulationResult", "StokesCube", "calibrate",
            "calibration", "compare", "filters", "load_observation", "model_atmosphere",
-           "open_flux", "photosphere", "reduction", "rt", "simulate", "simulate_many", "surface_field_from_map",
-           "synthetic_surface_field", "weak_flux_factor", "__citation__", "__version__"]
+           "open_flux", "photosphere", "reduction", "rt", "simulate", "simulate_many",
+           "surface_field_from_map", "synthetic_surface_field", "weak_flux_factor", "__citation__",
+           "__version__"]

@@ -60,6 +60,7 @@ IN_SITU_SOURCE = "Badman et al. 2021 (A&A 650, A18): |B_R|R^2 = 2.5 nT AU^2, PSP
 
 
 def load(relpath, root):
+    """A real map through `gongsynth.load_observation`."""
     with warnings.catch_warnings():  # HMI's charts have no observer; sunpy assumes the Earth (right here)
         warnings.simplefilter("ignore", SunpyMetadataWarning)
         return gongsynth.load_observation(root / relpath)
@@ -73,10 +74,12 @@ def unsigned_surface_flux(smap):
 
 
 def rotation(smap):
+    """The map's Carrington rotation number (-1 if the header has none)."""
     return int(smap.meta.get("car_rot", smap.meta.get("carrot", -1)))
 
 
 def build_table(root, maps=MAPS):
+    """The QTable: one row per map, the open flux raw and calibrated beside the in-situ value."""
     rows = []
     in_situ = in_situ_open_flux(IN_SITU_BR_R2)
     for relpath in maps:
@@ -123,11 +126,12 @@ def resolution_check(root, relpath="pairs/gong_mrzqs_c2254.fits"):
     fine_radius = gongsynth.open_flux(smap, nr=80)
     print(f"{relpath}: 90x180 nr 40 {base:.4e}; 180x360 {fine_angle / base - 1:+.2%}; nr 80 "
           f"{fine_radius / base - 1:+.2%}")
-    return {"resolution_check_map": relpath,
-            "finer_angle_change": float(fine_angle / base - 1), "finer_radius_change": float(fine_radius / base - 1)}
+    return {"resolution_check_map": relpath, "finer_angle_change": float(fine_angle / base - 1),
+            "finer_radius_change": float(fine_radius / base - 1)}
 
 
 def main():
+    """Command line: build, print and (with --out) write the table."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[1])
     parser.add_argument("--real", type=Path, default=REAL, help="shared/data/real folder")
     parser.add_argument("--out", type=Path, help="write OUT.ecsv and OUT.rst")

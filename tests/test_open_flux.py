@@ -210,3 +210,31 @@ def test_real_hmi_chart_needs_its_poles_filled():
     surface = prepare_synoptic_map(hmi, shape=(45, 90))
     unsigned = np.abs(surface.data).sum() * 4 * np.pi / surface.data.size * RSUN_CM**2
     assert 0 < flux.to_value(u.Mx) < unsigned  # a potential field opens only part of the surface flux
+
+
+def test_cli_calibrate_records_the_open_flux(tmp_path, capsys, monkeypatch):
+    """``gongsynth calibrate MAP --open-flux`` prints both open fluxes and writes them in the header."""
+    import gongsynth.analysis.open_flux as module
+    from gongsynth.cli import main
+
+    from .realdata import real_file
+
+    needs_pfss()
+    # A coarse grid keeps the test short (the CLI's own default is the module's); the extrapolation
+    # itself is tested above.
+    coarse = module.open_flux
+    monkeypatch.setattr(module, "open_flux", lambda smap: coarse(smap, nr=8, shape=(16, 32)))
+    source = real_file("gong/mrbqs221029t0304c2263_067.fits")
+    out = tmp_path / "calibrated.fits"
+    assert main(["calibrate", str(source), "--out", str(out), "--open-flux"]) == 0
+    printed = capsys.readouterr().out
+    assert "open flux (PFSS, source surface 2.5 R_sun), measured:" in printed
+    assert "open flux (PFSS, source surface 2.5 R_sun), calibrated:" in printed
+    header = sunpy.map.Map(out).meta
+    # The shipped table's factors lie within 0.9-1.35 (test_cli): the open flux moves within them too.
+    assert header["openflx0"] > 0 and 0.9 < header["openflx1"] / header["openflx0"] < 1.35
+    # Without sunkit-magex: "cannot run here" (exit 4), naming the extra; nothing is written.
+    monkeypatch.setitem(sys.modules, "sunkit_magex.pfss", None)
+    assert main(["calibrate", str(source), "--out", str(tmp_path / "x.fits"), "--open-flux"]) == 4
+    assert "gongsynth[pfss]" in capsys.readouterr().err
+    assert not (tmp_path / "x.fits").exists()
