@@ -86,12 +86,10 @@ for number, (smap, title, kwargs, label) in enumerate(panels, 1):
 # Open flux beside the in-situ value
 # ----------------------------------
 #
-# Calibration raises the unsigned photospheric flux of this map by about 5 %,
-# mostly at low latitudes where the factor is largest; the open flux, which
-# comes mostly from the polar fields seen at grazing angles where the factor is
-# about 1, rises by about as much.  The modellers' factors 2 and 4 bracket the
-# in-situ value: with gongsynth's present table, calibration closes only a
-# small part of the gap.
+# Calibration raises the unsigned photospheric flux of this map by 5 %, most
+# at low latitudes where the factor is largest, and the open flux by about as
+# much.  The modellers' factors 2 and 4 bracket the in-situ value: with
+# gongsynth's present table, calibration closes only a small part of the gap.
 fig, ax = plt.subplots(figsize=(7, 4), layout="constrained")
 bars = {"measured": flux["measured"], "calibrated": flux["calibrated"],
         "measured × 2": 2 * flux["measured"], "measured × 4": 4 * flux["measured"]}

@@ -6,7 +6,7 @@ Reads the GONG and HMI Carrington synoptic maps of ``shared/data/real/gong`` and
 computes `gongsynth.open_flux` (source surface 2.5 R_sun, the defaults of
 `gongsynth.analysis.open_flux`) of each map as observed and, for GONG, after
 `gongsynth.calibrate` (the table shipped with gongsynth: the true field), and writes
-the QTable as ECSV and as the reStructuredText table included by the user guide::
+the QTable as ECSV and as the reStructuredText table (.txt) included by the user guide::
 
     python scripts/open_flux_table.py --out docs/guide/open_flux_table
 
@@ -134,7 +134,7 @@ def main():
     """Command line: build, print and (with --out) write the table."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[1])
     parser.add_argument("--real", type=Path, default=REAL, help="shared/data/real folder")
-    parser.add_argument("--out", type=Path, help="write OUT.ecsv and OUT.rst")
+    parser.add_argument("--out", type=Path, help="write OUT.ecsv and OUT.txt (the table in reStructuredText)")
     args = parser.parse_args()
     start = time.perf_counter()
     table = build_table(args.real)
@@ -147,7 +147,7 @@ def main():
             shown[name] = shown[name].value
             shown[name].info.format = ".3f"
         shown.remove_column("date")
-        shown.write(args.out.with_suffix(".rst"), format="ascii.rst", overwrite=True)
+        shown.write(args.out.with_suffix(".txt"), format="ascii.rst", overwrite=True)
     print(f"{time.perf_counter() - start:.0f} s")
 
 
