@@ -350,13 +350,13 @@ def pfss_extrapolation(synoptic_map, *, source_surface=2.5, nr=40, shape=_DEFAUL
     ImportError
         If sunkit-magex is not installed (``pip install 'gongsynth[pfss]'``).
     """
-    pfss = import_optional("sunkit_magex.pfss", "pfss")
-    solver = import_optional("sunkit_magex.pfss.pfss", "pfss")
     rss = _source_surface_radius(source_surface)
     if isinstance(nr, bool) or not isinstance(nr, (int, np.integer)) or nr < 4:
         raise ValueError(f"nr must be an integer >= 4 (radial cells), got {nr!r}")
     ready = prepare_synoptic_map(synoptic_map, shape=shape, polar_fill=polar_fill, polar_cap=polar_cap,
                                  zero_point=zero_point)
+    pfss = import_optional("sunkit_magex.pfss", "pfss")  # after the checks: bad input is named first
+    solver = import_optional("sunkit_magex.pfss.pfss", "pfss")
     with _plain_numpy_kernels(solver):
         return pfss.pfss(pfss.Input(ready, int(nr), rss))
 
@@ -459,7 +459,7 @@ def in_situ_open_flux(radial_field: u.G, distance: u.AU = 1 * u.AU):
     Examples
     --------
     >>> import astropy.units as u
-    >>> round(in_situ_open_flux(2.5 * u.nT).to_value(u.Mx) / 1e22, 2)   # Badman et al. 2021's 2.5 nT AU²
+    >>> round(float(in_situ_open_flux(2.5 * u.nT).to_value(u.Mx)) / 1e22, 2)  # Badman et al. 2021
     7.03
     """
     flux = 4 * np.pi * distance**2 * np.abs(radial_field)
