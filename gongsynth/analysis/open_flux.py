@@ -105,16 +105,19 @@ def _pixel_edges(smap):
         pc = np.asarray(wcs.get_pc())
         if not np.allclose(pc, np.eye(2)):
             raise ValueError(f"synoptic_map must have unrotated axes (PC = identity), got PC {pc.tolist()}")
+    if crval[1] != 0:
+        raise ValueError(f"synoptic_map must have its reference latitude on the equator (CRVAL2 = 0; "
+                         f"otherwise the projection is oblique), got {crval[1]} deg")
     lon = crval[0] + (np.arange(nx + 1) + 0.5 - wcs.crpix[0]) * cdelt[0]
     y = (np.arange(ny + 1) + 0.5 - wcs.crpix[1]) * cdelt[1]
     if projection == "CEA":
         pv = {(i, m): v for i, m, v in wcs.get_pv()}
         if not math.isclose(pv.get((2, 1), 1.0), 1.0):
             raise ValueError(f"synoptic_map: CEA with PV2_1 = {pv[(2, 1)]} is not a sine-latitude grid")
-        sin_lat = np.sin(np.deg2rad(crval[1])) + np.deg2rad(y)
+        sin_lat = np.deg2rad(y)  # CEA (lambda = 1): y = sin(latitude) × 180/π
         span = abs(cdelt[1]) * ny * math.pi / 2
     else:
-        sin_lat = np.sin(np.deg2rad(np.clip(crval[1] + y, -90, 90)))
+        sin_lat = np.sin(np.deg2rad(np.clip(y, -90, 90)))
         span = abs(cdelt[1]) * ny
     if abs(abs(cdelt[0]) * nx - 360) > _ANGLE_TOLERANCE or abs(span - 180) > _ANGLE_TOLERANCE:
         raise ValueError(f"synoptic_map must span 360° of longitude and 180° of latitude (a full-Sun "
