@@ -126,7 +126,8 @@ def _strong_column(kind, knobs):
 def build_atmosphere_library(*, seed=0, shape=ATMOSPHERE_SHAPE, pixel_size=384 * u.km,
                              seeds_per_level=(1, 1, 1, 1), theta=ATMOSPHERE_THETA, knobs=None,
                              wavelength=None, mueller=None, instrument=None, max_velocity=4 * u.km / u.s,
-                             levels=ATMOSPHERE_LEVELS, strong_columns=STRONG_COLUMNS, progress=False, line=None):
+                             levels=ATMOSPHERE_LEVELS, strong_columns=STRONG_COLUMNS, progress=False,
+                             line=None):
     """
     Synthesise the patch library of a full-disk scene from the built-in 3-D Sun.
 
@@ -237,7 +238,8 @@ def build_atmosphere_library(*, seed=0, shape=ATMOSPHERE_SHAPE, pixel_size=384 *
     net[0] = 0.0      # the quiet level is balanced by construction
     if np.any(np.diff(net) <= 0):
         raise ValueError(f"the levels' net flux densities must increase, got {np.round(net, 2).tolist()} G")
-    meta = {"sun": "model-atmosphere", "line": rt_line.name, "lande_g": rt_line.lande, "levels": names, "seed_entropy": str(root.entropy),
+    meta = {"sun": "model-atmosphere", "line": rt_line.name, "lande_g": rt_line.lande, "levels": names,
+            "seed_entropy": str(root.entropy),
             "knobs": {k: str(v) for k, v in knobs.items()}, "seeds_per_level": list(seeds_per_level),
             "patch_net_G": [round(v, 3) for v in level_net], "basis_rank": basis.rank,
             "basis_error": basis.error, "truth": "rt paper definition, stored as B_z = B·n / mu",

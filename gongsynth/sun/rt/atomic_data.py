@@ -34,8 +34,9 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = ["ELEMENTS", "ABUNDANCE", "ATOMIC_MASS", "IONISATION_EV", "PF_TEMPERATURE", "PF_CAP",
-           "LOG_PARTITION", "partition_function", "LineData", "NiLineData", "FE_I_6173", "LINES", "DEFAULT_LINE",
-           "get_line", "zeeman_pattern", "effective_lande", "wigner_3j_squared", "LANDE_LS", "LANDE_MEASURED"]
+           "LOG_PARTITION", "partition_function", "LineData", "NiLineData", "FE_I_6173", "LINES",
+           "DEFAULT_LINE", "get_line", "zeeman_pattern", "effective_lande", "wigner_3j_squared", "LANDE_LS",
+           "LANDE_MEASURED"]
 
 #: Elements of the equation of state (electron donors and the mass budget).
 ELEMENTS = ("H", "He", "C", "N", "O", "Na", "Mg", "Al", "Si", "S", "K", "Ca", "Cr", "Fe", "Ni")
@@ -373,7 +374,8 @@ class LineData:
                 raise ValueError(f"{cls}.{name} must be >= 0, got {getattr(self, name)!r}")
         for name in ("j_lower", "j_upper"):
             if abs(2 * getattr(self, name) - round(2 * getattr(self, name))) > 1e-9:
-                raise ValueError(f"{cls}.{name} must be an integer or half-integer, got {getattr(self, name)!r}")
+                raise ValueError(f"{cls}.{name} must be an integer or half-integer, "
+                                 f"got {getattr(self, name)!r}")
         if abs(self.j_upper - self.j_lower) > 1 or self.j_upper == self.j_lower == 0:
             raise ValueError(f"{cls}: J_l = {self.j_lower} → J_u = {self.j_upper} is not a dipole transition")
         if (self.vdw_sigma is None) != (self.vdw_alpha is None):
@@ -413,8 +415,8 @@ class LineData:
 
     @property
     def is_normal_triplet(self):
-        """Whether the levels' pattern is a triplet (one component per q): exact in the transfer."""
-        return all(len(c) == 1 for c in self.zeeman.values())
+        """Whether the levels' pattern is a triplet (one shift per q): exact in the transfer."""
+        return all(len({shift for shift, _ in c}) == 1 for c in self.zeeman.values())
 
     @property
     def lande(self):

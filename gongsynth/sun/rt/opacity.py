@@ -90,8 +90,9 @@ def line_constants(line=None):
         alpha = line.vdw_alpha
         v0 = 1e4
         vbar_t = 8.0 * 1.380649e-23 / (math.pi * 1.66053907e-27) * (1.0 / 1.007975 + 1.0 / mass)  # v̄²/T
-        vdw = (2.0 * (4.0 / math.pi) ** (alpha / 2) * math.gamma(2.0 - alpha / 2) * v0 * line.vdw_sigma * a0 ** 2
-               * (vbar_t ** 0.5 / v0) ** (1.0 - alpha) * (1.0 + 0.42 * ABUNDANCE["He"]) * 1e6)
+        vdw = (2.0 * (4.0 / math.pi) ** (alpha / 2) * math.gamma(2.0 - alpha / 2) * v0
+               * line.vdw_sigma * a0 ** 2 * (vbar_t ** 0.5 / v0) ** (1.0 - alpha)
+               * (1.0 + 0.42 * ABUNDANCE["He"]) * 1e6)
         vdw_exponent = 0.5 * (1.0 - alpha)
     # Quadratic Stark (RH / Lightweaver).
     e_ryd = ryd / (1.0 + 9.1093837e-31 / (mass * 1.66053907e-27))

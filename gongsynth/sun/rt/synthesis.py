@@ -1,5 +1,5 @@
 """
-`synthesize`: LTE Stokes synthesis of a spectral line (Ni I 676.78 nm, Fe I 617.33 nm), Atmosphere → StokesCube.
+`synthesize`: LTE Stokes synthesis of a spectral line (Ni I 676.78 nm, Fe I 617.33 nm), Atmosphere → Stokes.
 
 Work is done in blocks of output rows (about `BLOCK_COLUMNS` rays at a time):
 sample every field along the block's rays (`~gongsynth.sun.rt.rays`), complete
@@ -38,7 +38,7 @@ WINDOW_POINTS = 51
 
 def default_wavelength(line=None):
     """
-    The default spectral grid of a line: `WINDOW_POINTS` air wavelengths over ±`WINDOW_HALF_WIDTH` of its centre.
+    The default spectral grid of a line: `WINDOW_POINTS` air wavelengths, ±`WINDOW_HALF_WIDTH` nm about it.
 
     For Ni I 676.78 nm this is the paper's grid, 676.73–676.83 nm in 2 pm steps.
 
@@ -251,8 +251,8 @@ def synthesize(atmosphere, *, mu=1.0, azimuth=0 * u.deg, wavelength=None, truth=
             dst[sl] = src.reshape(rows.size, nx, -1)
         blos[sl] = tb.reshape(rows.size, nx)
         anchor[sl] = th.reshape(rows.size, nx)
-    meta = {"origin": "gongsynth.rt.synthesize", "method": f"LTE, DELO-linear, {line.name}", "line": line.name,
-            "line_wavelength_nm": float(line.wavelength_nm),
+    meta = {"origin": "gongsynth.rt.synthesize", "method": f"LTE, DELO-linear, {line.name}",
+            "line": line.name, "line_wavelength_nm": float(line.wavelength_nm),
             "mu": mu_value, "los_azimuth_deg": float(np.degrees(az)), "truth": str(truth), "rays": rays,
             "reference_height_km": z_ref, "truth_anchor_mean_km": float(anchor.mean()),
             "lande_g": line.lande, "atmosphere": dict(atmosphere.meta)}
