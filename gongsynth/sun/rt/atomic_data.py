@@ -162,7 +162,8 @@ def partition_function(species, temperature):
 
 #: Landé factor of Ni I z³P°₁ in LS coupling (the paper's value, and GONG's reduction constant).
 LANDE_LS = 1.5
-#: Measured Landé factor of Ni I z³P°₁, the line's effective factor (Bruls et al. 1993; DESIGN §3.20).
+#: Measured Landé factor of Ni I z³P°₁, the line's effective factor (Bruls 1993, A&A 269, 509;
+#: DESIGN §3.20).
 LANDE_MEASURED = 1.426
 
 _CM_TO_EV = 1.239841984e-4
@@ -472,15 +473,16 @@ class NiLineData(LineData):
     Ni I 676.78 nm (a¹S₀ → z³P°₁, 3d¹⁰ → 3d⁹(²D)4p), GONG's line.
 
     Sources: lower level 14 728.847 cm⁻¹ (1.826 eV), upper 29 500.690 cm⁻¹,
-    Ni II ground 61 579 cm⁻¹ (NIST ASD; the series limit Barklem et al. 2000
-    list for this upper level), log gf = −2.17 (f = 0.0068; the Kurucz value
+    Ni II ground 61 579 cm⁻¹ (the series limit Barklem et al. 2000 list for
+    this upper level; NIST's ionisation energy is 61 619.8 cm⁻¹), log gf = −2.17 (f = 0.0068; the Kurucz value
     carried by RH's and Lightweaver's Ni I model atom, and VALD), γ_rad =
     1.11 × 10⁸ s⁻¹ (same atom file); van der Waals broadening by Unsöld's
     (1955) formula in RH's form (Uitenbroek 2001), enhancement 1 as in that
     atom file (the line is not in Barklem et al. 2000's ABO list);
     quadratic Stark broadening in RH's approximation.  J = 0 → 1: a normal
     Zeeman triplet with ḡ = g(z³P°₁); the Sun's value is the measured
-    1.426 (`LANDE_MEASURED`, Bruls et al. 1993, A&A 269, 509; DESIGN §3.20),
+    1.426 (`LANDE_MEASURED`, Bruls 1993, A&A 269, 509, "The formation of
+    helioseismology lines IV: the Ni I 676.8 nm intercombination line"; DESIGN §3.20),
     LS coupling gives 1.5 (`LANDE_LS`, the paper's value and GONG's
     reduction constant): ``NiLineData(lande_g=LANDE_LS)``.  The rest
     wavelength is GONG's reference, 676.78 nm (air; NIST lists 676.7768 nm
