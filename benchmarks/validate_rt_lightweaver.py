@@ -37,6 +37,7 @@ from gongsynth.sun.photosphere.reference import (
     refined_atmosphere,
 )
 from gongsynth.sun.rt import NiLineData, synthesize
+from gongsynth.sun.rt.atomic_data import LANDE_LS
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 MODELS = DATA / "real" / "models"
@@ -96,7 +97,7 @@ def main():
     parser.add_argument("--mu", type=float, nargs="+", default=[1.0, 0.5, 0.25])
     args = parser.parse_args()
     warnings.simplefilter("ignore")          # lightweaver's import and atom warnings
-    line = NiLineData(partition_levels=lightweaver_partition_levels())
+    line = NiLineData(lande_g=LANDE_LS, partition_levels=lightweaver_partition_levels())   # the atom's LS g
     models = atmospheres()
     print(f"{'atmosphere':12s} {'nz':>4s} {'mu':>4s} {'B/G':>5s} {'incl':>4s} {'max|dI|/Ic':>10s} "
           f"{'dVpeak':>7s} {'max|dQ|/Ic':>10s} {'dIc':>7s}")

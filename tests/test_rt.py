@@ -10,6 +10,7 @@ from scipy.special import wofz
 import gongsynth
 from gongsynth.sun.photosphere._kernel import me_kernel, voigt_table
 from gongsynth.sun.rt import NiLineData, synthesize
+from gongsynth.sun.rt.atomic_data import LANDE_LS
 from gongsynth.sun.rt.kernels import ZEEMAN_CM_PER_G, faddeeva, solve_columns
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
@@ -233,7 +234,7 @@ def test_against_lightweaver(falc):
         warnings.simplefilter("ignore")
         import lightweaver.rh_atoms as atoms
         levels = tuple((lv.E, lv.g, lv.stage) for lv in atoms.NiI_atom().levels)
-    line = NiLineData(partition_levels=levels)
+    line = NiLineData(lande_g=LANDE_LS, partition_levels=levels)     # the atom's LS-coupling g
     lam = np.linspace(676.73, 676.83, 51) * u.nm
     ref = falc_stokes([0, 1000] * u.G, wavelength=lam)
     for k, b in enumerate((0.0, 1000.0)):

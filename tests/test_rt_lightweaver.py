@@ -12,6 +12,7 @@ import pytest
 
 import gongsynth
 from gongsynth.sun.rt import NiLineData, synthesize
+from gongsynth.sun.rt.atomic_data import LANDE_LS
 from gongsynth.sun.rt.eos import K_BOLTZMANN, PARTICLES_PER_H
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
@@ -33,8 +34,9 @@ def reference():
 
 @pytest.fixture(scope="module")
 def line(reference):
-    """The atom's own Ni I / Ni II levels as gongsynth's partition functions: the same atomic data."""
-    return NiLineData(partition_levels=reference.lightweaver_partition_levels())
+    """The atom's own Ni I / Ni II levels as gongsynth's partition functions, and its LS-coupling
+    Landé factor (1.5, not the Sun's measured 1.426): the same atomic data."""
+    return NiLineData(lande_g=LANDE_LS, partition_levels=reference.lightweaver_partition_levels())
 
 
 def with_field(atm, field, inclination_deg):

@@ -467,7 +467,10 @@ def cached_library(*, sun="milne-eddington", progress=False, **arguments):
     library = None
     if folder is not None and (folder / "library.json").is_file():
         try:
-            library = _load(folder, arguments.get("line") or NiLine())
+            # ``line`` is the Milne-Eddington NiLine, or the 3-D library's spectral line (then the rows'
+            # limb darkening is NiLine's too, see library_rt).
+            me_line = arguments.get("line")
+            library = _load(folder, me_line if isinstance(me_line, NiLine) else NiLine())
         except (OSError, ValueError, KeyError):
             library = None
     if library is None:

@@ -19,7 +19,9 @@ from the built-in 3-D Sun:
   ``umbra_field``) stratifications, each sunk by its own Wilson depression
   as the builder places them; the renderer mixes the two linearly in between;
 - every patch is synthesised by `gongsynth.sun.rt.synthesize` (inclined rays
-  through the periodic box) at the viewing angles ``theta`` with the observer
+  through the periodic box) in the library's ``line`` (a name of
+  `gongsynth.sun.rt.LINES`, default Ni I 676.8 nm, with the line's measured
+  Landé factor) at the viewing angles ``theta`` with the observer
   toward +x, and each spectrum is stored as its continuum and Doppler-basis
   coordinates (`gongsynth.stages.scene.library_layout.row_weights`), divided by the
   continuum limb darkening at that angle;
@@ -27,7 +29,13 @@ from the built-in 3-D Sun:
   ``"paper"`` definition of `gongsynth.sun.rt.truth`), which depends on the
   angle: the row's B_z slot holds it divided by μ and the B_x slot is zero,
   so the renderer's ``B_z μ + B_x sin θ`` gives it back exactly at the
-  library's angles and interpolates it in between.
+  library's angles and interpolates it in between.  The truth is the same
+  quantity for every line (τ_c at the line's own wavelength).
+
+The rows are divided by, and the renderer multiplies them again by, the
+continuum limb darkening of `gongsynth.sun.photosphere.NiLine` (Neckel & Labs
+at 676.8 nm) for every line: the same polynomial both ways, so for another line
+it only enters through the interpolation between the library's angles.
 
 The spectra of the 3-D Sun carry their own granular flows, hence their own
 convective blueshift; the renderer leaves out the tabulated one for such a
@@ -50,6 +58,7 @@ from gongsynth.sun.atmosphere import Atmosphere
 from gongsynth.sun.model_atmosphere import model_atmosphere
 from gongsynth.sun.model_atmosphere.builder import reference_stratifications
 from gongsynth.sun.photosphere import NiLine
+from gongsynth.sun.rt import default_wavelength, get_line
 from gongsynth.sun.rt import synthesize as rt_synthesize
 
 __all__ = ["ATMOSPHERE_LEVELS", "STRONG_COLUMNS", "ATMOSPHERE_THETA", "ATMOSPHERE_SHAPE",
@@ -117,7 +126,8 @@ def _strong_column(kind, knobs):
 def build_atmosphere_library(*, seed=0, shape=ATMOSPHERE_SHAPE, pixel_size=384 * u.km,
                              seeds_per_level=(1, 1, 1, 1), theta=ATMOSPHERE_THETA, knobs=None,
                              wavelength=None, mueller=None, instrument=None, max_velocity=4 * u.km / u.s,
-                             levels=ATMOSPHERE_LEVELS, strong_columns=STRONG_COLUMNS, progress=False):
+                             levels=ATMOSPHERE_LEVELS, strong_columns=STRONG_COLUMNS, progress=False,
+                             line=None):
     """
     Synthesise the patch library of a full-disk scene from the built-in 3-D Sun.
 
@@ -137,7 +147,8 @@ def build_atmosphere_library(*, seed=0, shape=ATMOSPHERE_SHAPE, pixel_size=384 *
         `model_atmosphere` knobs of the run's built-in Sun (``[photosphere]``);
         the levels override theirs, and ``spot`` is off.
     wavelength : `~astropy.units.Quantity`, optional
-        Spectral grid (default: the paper's 51 points).
+        Spectral grid (default: `gongsynth.sun.rt.default_wavelength` of the
+        line, for Ni I the paper's 51 points).
     mueller : array_like, optional
         A (4, 4) instrument Mueller matrix (default: identity), as in
         `gongsynth.stages.scene.library.build_library`.
@@ -150,6 +161,10 @@ def build_atmosphere_library(*, seed=0, shape=ATMOSPHERE_SHAPE, pixel_size=384 *
         Default `STRONG_COLUMNS`: the sunspot components and their field knobs.
     progress : bool, optional
         A progress bar over the patches and angles.
+    line : str or `~gongsynth.sun.rt.LineData`, optional
+        The spectral line synthesised (a name of `gongsynth.sun.rt.LINES`,
+        e.g. ``"Fe I 617.3"``; default ``"Ni I 676.8"``).  Part of the cache key
+        of `gongsynth.stages.scene.library.cached_library`.
 
     Returns
     -------
@@ -163,7 +178,9 @@ def build_atmosphere_library(*, seed=0, shape=ATMOSPHERE_SHAPE, pixel_size=384 *
     >>> lib.n_levels, lib.patches.shape[:4], bool(lib.level_net[-1] > lib.level_net[3])
     (6, (4, 8, 8, 2), True)
     """
+    rt_line = get_line(line)
     line = NiLine()
+    wavelength = default_wavelength(rt_line) if wavelength is None else wavelength
     lay = library_layout(instrument=instrument, wavelength=wavelength, pixel_size=pixel_size, theta=theta,
                          seeds_per_level=seeds_per_level, levels=levels, mueller=mueller,
                          max_velocity=max_velocity, line=line)
@@ -187,7 +204,7 @@ def build_atmosphere_library(*, seed=0, shape=ATMOSPHERE_SHAPE, pixel_size=384 *
         """Synthesise ``atmosphere`` at every angle into ``rows`` (..., n_theta, K)."""
         for t, m in enumerate(mu):
             cube = rt_synthesize(atmosphere, mu=float(m), azimuth=0 * u.deg, wavelength=wavelength,
-                                 progress=False)
+                                 progress=False, line=rt_line)
             block = _contract(cube, weights[t])
             rows[..., t, :n_spec] = block.reshape(rows[..., t, :n_spec].shape)
             rows[..., t, n_spec] = (cube.blos.value / m).reshape(rows[..., t, n_spec].shape)
@@ -221,7 +238,8 @@ def build_atmosphere_library(*, seed=0, shape=ATMOSPHERE_SHAPE, pixel_size=384 *
     net[0] = 0.0      # the quiet level is balanced by construction
     if np.any(np.diff(net) <= 0):
         raise ValueError(f"the levels' net flux densities must increase, got {np.round(net, 2).tolist()} G")
-    meta = {"sun": "model-atmosphere", "levels": names, "seed_entropy": str(root.entropy),
+    meta = {"sun": "model-atmosphere", "line": rt_line.name, "lande_g": rt_line.lande, "levels": names,
+            "seed_entropy": str(root.entropy),
             "knobs": {k: str(v) for k, v in knobs.items()}, "seeds_per_level": list(seeds_per_level),
             "patch_net_G": [round(v, 3) for v in level_net], "basis_rank": basis.rank,
             "basis_error": basis.error, "truth": "rt paper definition, stored as B_z = B·n / mu",

@@ -63,6 +63,9 @@ class NiLine:
         Effective Landé factor used in the synthesis.  None (default) takes
         ``instrument.lande_g`` (1.5, as the paper used in both the radiative
         transfer and the inversion); the literature value is 1.426 (Bruls 1993).
+        The 3-D Sun carries the measured factor (DESIGN decision 20,
+        `gongsynth.rt.LINES`); this toy keeps the instrument's by default, the
+        Sun as the reduction assumes it: the control case without the mismatch.
 
     Examples
     --------

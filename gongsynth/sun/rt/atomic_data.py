@@ -34,7 +34,9 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = ["ELEMENTS", "ABUNDANCE", "ATOMIC_MASS", "IONISATION_EV", "PF_TEMPERATURE", "PF_CAP",
-           "LOG_PARTITION", "partition_function", "NiLineData", "LANDE_LS", "LANDE_MEASURED"]
+           "LOG_PARTITION", "partition_function", "LineData", "NiLineData", "FE_I_6173", "LINES",
+           "DEFAULT_LINE", "get_line", "zeeman_pattern", "effective_lande", "wigner_3j_squared", "LANDE_LS",
+           "LANDE_MEASURED"]
 
 #: Elements of the equation of state (electron donors and the mass budget).
 ELEMENTS = ("H", "He", "C", "N", "O", "Na", "Mg", "Al", "Si", "S", "K", "Ca", "Cr", "Fe", "Ni")
@@ -158,82 +160,239 @@ def partition_function(species, temperature):
     return 10.0 ** log_u
 
 
-#: Landé factor of the upper level z³P°₁ in LS coupling (the paper's value).
+#: Landé factor of Ni I z³P°₁ in LS coupling (the paper's value, and GONG's reduction constant).
 LANDE_LS = 1.5
-#: Measured effective Landé factor (the literature alternative).
+#: Measured Landé factor of Ni I z³P°₁, the line's effective factor (Bruls 1993, A&A 269, 509;
+#: DESIGN §3.20).
 LANDE_MEASURED = 1.426
 
+_CM_TO_EV = 1.239841984e-4
+_FIELD_NAMES_TEXT = ("name", "element")
 
-@dataclass(frozen=True)
-class NiLineData:
+
+def wigner_3j_squared(j1, j2, j3, m1, m2, m3):
     """
-    Atomic data of Ni I 676.78 nm for LTE synthesis (cgs and eV; see the module notes for sources).
+    Square of the Wigner 3-j symbol (j1 j2 j3; m1 m2 m3) by Racah's formula.
 
     Parameters
     ----------
-    wavelength_nm : float
-        Rest wavelength in air (nm), 676.78.
-    log_gf : float
-        log10 of the oscillator strength times the lower statistical weight, −2.17.
-    lower_energy_cm : float
-        Lower-level energy (cm⁻¹), 14 728.847.
-    upper_energy_cm : float
-        Upper-level energy (cm⁻¹), 29 500.690.
-    ion_ground_cm : float
-        Energy of the Ni II ground level (cm⁻¹), 61 579 (the overlying continuum of the Unsöld formula).
-    g_lower : int
-        Statistical weight of the lower level (J = 0: 1).
-    lande_g : float
-        Effective Landé factor of the normal triplet, `LANDE_LS` (1.5) or `LANDE_MEASURED`.
-    gamma_rad : float
-        Radiative damping (s⁻¹), 1.11e8.
-    vdw_enhancement : float
-        Factor on Unsöld's van der Waals width (1.0).
-    stark_enhancement : float
-        Factor on the quadratic Stark width (1.0).
-    mass_amu : float
-        Atomic mass of Ni.
-    element : str
-        ``"Ni"``.
-    partition_levels : tuple or None
-        Optional explicit levels ``((E_cm, g, stage), ...)`` for the Ni partition
-        functions instead of the Kurucz table (to reproduce a model atom, e.g.
-        Lightweaver's, in a comparison).
+    j1, j2, j3, m1, m2, m3 : float
+        Integer or half-integer angular momenta and projections.
+
+    Returns
+    -------
+    float
 
     Examples
     --------
-    >>> line = NiLineData()
-    >>> round(line.lower_energy_ev, 3), round(line.oscillator_strength, 4)
-    (1.826, 0.0068)
+    >>> round(wigner_3j_squared(1, 0, 1, 0, 0, 0), 6)     # 1/3
+    0.333333
+    """
+    from math import factorial
+
+    if abs(m1 + m2 + m3) > 1e-9 or any(abs(m) > j + 1e-9 for m, j in ((m1, j1), (m2, j2), (m3, j3))):
+        return 0.0
+    if not abs(j1 - j2) - 1e-9 <= j3 <= j1 + j2 + 1e-9:
+        return 0.0
+
+    def f(x):
+        return factorial(int(round(x)))
+
+    tri = f(j1 + j2 - j3) * f(j1 - j2 + j3) * f(-j1 + j2 + j3) / f(j1 + j2 + j3 + 1)
+    pre = tri * f(j1 + m1) * f(j1 - m1) * f(j2 + m2) * f(j2 - m2) * f(j3 + m3) * f(j3 - m3)
+    total = 0.0
+    for k in range(0, int(round(j1 + j2 + j3)) + 1):
+        args = (k, j1 + j2 - j3 - k, j1 - m1 - k, j2 + m2 - k, j3 - j2 + m1 + k, j3 - j1 - m2 + k)
+        if min(args) < -1e-9:
+            continue
+        total += (-1) ** k / np.prod([f(a) for a in args])
+    return float(pre * total * total)
+
+
+def zeeman_pattern(j_lower, j_upper, lande_lower, lande_upper):
+    """
+    Zeeman components of a J_l → J_u dipole transition in the linear (weak-field) regime.
+
+    Parameters
+    ----------
+    j_lower, j_upper : float
+        Total angular momenta of the levels (|ΔJ| ≤ 1, not 0 → 0).
+    lande_lower, lande_upper : float
+        Their Landé factors (a J = 0 level's is irrelevant).
+
+    Returns
+    -------
+    dict
+        For q = M_l − M_u in (−1, 0, +1): a list of ``(shift, strength)``: the
+        wavelength shift in units of Δλ_B = 4.67e-13 λ²[Å] B[G] Å,
+        g_l M_l − g_u M_u, and the relative strength 3 (J_u J_l 1; −M_u M_l −q)²,
+        which sums to 1 over each q (Landi Degl'Innocenti & Landolfi 2004, §3.1).
+
+    Examples
+    --------
+    >>> p = zeeman_pattern(0, 1, 0.0, 1.5)                # a normal triplet
+    >>> p[1], p[0], p[-1]
+    ([(1.5, 1.0)], [(0.0, 1.0)], [(-1.5, 1.0)])
+    """
+    if abs(j_upper - j_lower) > 1 or (j_upper == 0 and j_lower == 0):
+        raise ValueError(f"not a dipole transition: J_l = {j_lower}, J_u = {j_upper}")
+    pattern = {}
+    for q in (-1, 0, 1):
+        comps = []
+        for k in range(int(round(2 * j_lower)) + 1):
+            m_l = -j_lower + k
+            m_u = m_l - q
+            if abs(m_u) > j_upper + 1e-9:
+                continue
+            s = 3.0 * wigner_3j_squared(j_upper, j_lower, 1, -m_u, m_l, -q)
+            if s > 0:
+                comps.append((float(lande_lower * m_l - lande_upper * m_u) + 0.0, round(s, 12)))
+        pattern[q] = comps
+    return pattern
+
+
+def effective_lande(j_lower, j_upper, lande_lower, lande_upper):
+    """
+    Effective Landé factor ḡ = ½(g_u + g_l) + ¼(g_u − g_l)[J_u(J_u+1) − J_l(J_l+1)].
+
+    The centre of gravity of the σ components of `zeeman_pattern` in units of Δλ_B
+    (Landi Degl'Innocenti & Landolfi 2004, eq. 3.44); it sets the weak-field V.
+
+    Parameters
+    ----------
+    j_lower, j_upper, lande_lower, lande_upper : float
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> effective_lande(1, 0, 2.5, 0.0)                    # Fe I 617.3 nm
+    2.5
+    """
+    d = j_upper * (j_upper + 1) - j_lower * (j_lower + 1)
+    return 0.5 * (lande_upper + lande_lower) + 0.25 * (lande_upper - lande_lower) * d
+
+
+@dataclass(frozen=True)
+class LineData:
+    """
+    Atomic data of one spectral line for LTE Zeeman synthesis (cgs and eV).
+
+    Every instance in `LINES` cites its sources in its notes; see `NiLineData`
+    and `FE_I_6173` for the two lines gongsynth ships.
+
+    Zeeman pattern: the levels' J and Landé factors give the full pattern
+    (`zeeman_pattern`) and its effective Landé factor (`effective_lande`).  The
+    transfer uses a triplet with ``lande`` (the ``lande_g`` given, else the
+    levels' effective factor): exact for the normal triplets of J = 0 ↔ 1
+    (both shipped lines), and for an anomalous pattern the effective-triplet
+    approximation, which keeps the weak-field V (∝ ḡ) exact and misses the
+    second-order splitting of Q and U (`is_normal_triplet` says which).
+
+    Parameters
+    ----------
+    name : str
+        Registry name, e.g. ``"Ni I 676.8"``.
+    element : str
+        Element symbol of a neutral atom of the equation of state (`ELEMENTS`).
+    wavelength_nm : float
+        Rest wavelength in air (nm), the zero of the line's Doppler scale.
+    log_gf : float
+        log10 (g_l f).
+    lower_energy_cm, upper_energy_cm : float
+        Level energies (cm⁻¹).
+    ion_ground_cm : float
+        Ionisation energy (cm⁻¹, the ion's ground level): the continuum of the
+        Unsöld and Stark formulas.
+    j_lower, j_upper : float
+        Total angular momenta of the levels.
+    lande_lower, lande_upper : float
+        Their Landé factors (measured where known).
+    gamma_rad : float
+        Radiative damping (s⁻¹).
+    lande_g : float or None
+        Effective Landé factor of the synthesis; None (default) takes the
+        levels' (`effective_lande`).
+    vdw_sigma, vdw_alpha : float or None
+        Anstee–Barklem–O'Mara cross-section (a₀², at 10 km/s) and velocity
+        exponent; None: Unsöld's formula times ``vdw_enhancement``.
+    vdw_enhancement : float
+        Factor on Unsöld's van der Waals width (1.0; unused with ABO data).
+    stark_enhancement : float
+        Factor on the quadratic Stark width (1.0).
+    mass_amu : float or None
+        Atomic mass (default the element's, `ATOMIC_MASS`).
+    partition_levels : tuple or None
+        Optional explicit levels ``((E_cm, g, stage), ...)`` for the element's
+        partition functions instead of the Kurucz table (to reproduce a model
+        atom, e.g. Lightweaver's, in a comparison).
     """
 
-    wavelength_nm: float = 676.78
-    log_gf: float = -2.17
-    lower_energy_cm: float = 14728.847
-    upper_energy_cm: float = 29500.690
-    ion_ground_cm: float = 61579.0
-    g_lower: int = 1
-    lande_g: float = LANDE_LS
-    gamma_rad: float = 1.11e8
+    name: str
+    element: str
+    wavelength_nm: float
+    log_gf: float
+    lower_energy_cm: float
+    upper_energy_cm: float
+    ion_ground_cm: float
+    j_lower: float
+    j_upper: float
+    lande_lower: float
+    lande_upper: float
+    gamma_rad: float
+    lande_g: float | None = None
+    vdw_sigma: float | None = None
+    vdw_alpha: float | None = None
     vdw_enhancement: float = 1.0
     stark_enhancement: float = 1.0
-    mass_amu: float = ATOMIC_MASS["Ni"]
-    element: str = "Ni"
+    mass_amu: float | None = None
     partition_levels: tuple | None = None
 
     def __post_init__(self):
+        cls = type(self).__name__
+        for name in _FIELD_NAMES_TEXT:
+            if not isinstance(getattr(self, name), str):
+                raise TypeError(f"{cls}.{name} must be a str, got {getattr(self, name)!r}")
+        if self.element not in ELEMENTS:
+            raise ValueError(f"{cls}.element must be one of {ELEMENTS}, got {self.element!r}")
+        if self.mass_amu is None:
+            object.__setattr__(self, "mass_amu", ATOMIC_MASS[self.element])
+        optional = ("lande_g", "vdw_sigma", "vdw_alpha")
         for f in dataclasses.fields(self):
             value = getattr(self, f.name)
-            if f.name in ("element", "partition_levels"):
+            if f.name in _FIELD_NAMES_TEXT + ("partition_levels",) or (f.name in optional and value is None):
                 continue
-            if isinstance(value, bool) or not np.isfinite(value):
-                raise ValueError(f"NiLineData.{f.name} must be a finite number, got {value!r}")
-        for name in ("wavelength_nm", "gamma_rad", "mass_amu", "g_lower"):
+            if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) \
+                    or not np.isfinite(value):
+                raise ValueError(f"{cls}.{f.name} must be a finite number, got {value!r}")
+        for name in ("wavelength_nm", "gamma_rad", "mass_amu", "ion_ground_cm"):
             if getattr(self, name) <= 0:
-                raise ValueError(f"NiLineData.{name} must be positive, got {getattr(self, name)!r}")
-        for name in ("vdw_enhancement", "stark_enhancement"):
+                raise ValueError(f"{cls}.{name} must be positive, got {getattr(self, name)!r}")
+        for name in ("vdw_enhancement", "stark_enhancement", "j_lower", "j_upper"):
             if getattr(self, name) < 0:
-                raise ValueError(f"NiLineData.{name} must be >= 0, got {getattr(self, name)!r}")
+                raise ValueError(f"{cls}.{name} must be >= 0, got {getattr(self, name)!r}")
+        for name in ("j_lower", "j_upper"):
+            if abs(2 * getattr(self, name) - round(2 * getattr(self, name))) > 1e-9:
+                raise ValueError(f"{cls}.{name} must be an integer or half-integer, "
+                                 f"got {getattr(self, name)!r}")
+        if abs(self.j_upper - self.j_lower) > 1 or self.j_upper == self.j_lower == 0:
+            raise ValueError(f"{cls}: J_l = {self.j_lower} → J_u = {self.j_upper} is not a dipole transition")
+        if (self.vdw_sigma is None) != (self.vdw_alpha is None):
+            raise ValueError(f"{cls}.vdw_sigma and vdw_alpha go together (ABO data), got "
+                             f"{self.vdw_sigma!r} and {self.vdw_alpha!r}")
+        if self.vdw_sigma is not None and (self.vdw_sigma <= 0 or not 0 <= self.vdw_alpha < 1):
+            raise ValueError(f"{cls}: ABO sigma must be > 0 and alpha in [0, 1), got "
+                             f"{self.vdw_sigma!r}, {self.vdw_alpha!r}")
+        if not self.lower_energy_cm < self.upper_energy_cm < self.ion_ground_cm:
+            raise ValueError(f"{cls}: need lower_energy_cm < upper_energy_cm < ion_ground_cm, got "
+                             f"{self.lower_energy_cm}, {self.upper_energy_cm}, {self.ion_ground_cm}")
+
+    @property
+    def g_lower(self):
+        """Statistical weight of the lower level, 2 J_l + 1."""
+        return int(round(2 * self.j_lower + 1))
 
     @property
     def oscillator_strength(self):
@@ -243,16 +402,33 @@ class NiLineData:
     @property
     def lower_energy_ev(self):
         """Lower-level excitation energy (eV)."""
-        return self.lower_energy_cm * 1.239841984e-4
+        return self.lower_energy_cm * _CM_TO_EV
 
     @property
     def ionisation_ev(self):
-        """Ionisation energy of Ni I (eV) from the Ni II ground level."""
-        return self.ion_ground_cm * 1.239841984e-4
+        """Ionisation energy of the neutral atom (eV), from ``ion_ground_cm``."""
+        return self.ion_ground_cm * _CM_TO_EV
+
+    @property
+    def zeeman(self):
+        """The levels' Zeeman pattern (`zeeman_pattern`)."""
+        return zeeman_pattern(self.j_lower, self.j_upper, self.lande_lower, self.lande_upper)
+
+    @property
+    def is_normal_triplet(self):
+        """Whether the levels' pattern is a triplet (one shift per q): exact in the transfer."""
+        return all(len({shift for shift, _ in c}) == 1 for c in self.zeeman.values())
+
+    @property
+    def lande(self):
+        """Effective Landé factor used by the synthesis: ``lande_g``, else the levels' `effective_lande`."""
+        if self.lande_g is not None:
+            return float(self.lande_g)
+        return float(effective_lande(self.j_lower, self.j_upper, self.lande_lower, self.lande_upper))
 
     def partition_functions(self, temperature):
         """
-        U(Ni I) and U(Ni II) at ``temperature`` (K).
+        U of the neutral atom and of the first ion at ``temperature`` (K).
 
         Parameters
         ----------
@@ -285,6 +461,115 @@ class NiLineData:
 
         Returns
         -------
-        `NiLineData`
+        `LineData`
+            Of the same class.
         """
         return dataclasses.replace(self, **changes)
+
+
+@dataclass(frozen=True)
+class NiLineData(LineData):
+    """
+    Ni I 676.78 nm (a¹S₀ → z³P°₁, 3d¹⁰ → 3d⁹(²D)4p), GONG's line.
+
+    Sources: lower level 14 728.847 cm⁻¹ (1.826 eV), upper 29 500.690 cm⁻¹,
+    Ni II ground 61 579 cm⁻¹ (the series limit Barklem et al. 2000 list for
+    this upper level; NIST's ionisation energy is 61 619.8 cm⁻¹), log gf = −2.17 (f = 0.0068; the Kurucz value
+    carried by RH's and Lightweaver's Ni I model atom, and VALD), γ_rad =
+    1.11 × 10⁸ s⁻¹ (same atom file); van der Waals broadening by Unsöld's
+    (1955) formula in RH's form (Uitenbroek 2001), enhancement 1 as in that
+    atom file (the line is not in Barklem et al. 2000's ABO list);
+    quadratic Stark broadening in RH's approximation.  J = 0 → 1: a normal
+    Zeeman triplet with ḡ = g(z³P°₁); the Sun's value is the measured
+    1.426 (`LANDE_MEASURED`, Bruls 1993, A&A 269, 509, "The formation of
+    helioseismology lines IV: the Ni I 676.8 nm intercombination line"; DESIGN §3.20),
+    LS coupling gives 1.5 (`LANDE_LS`, the paper's value and GONG's
+    reduction constant): ``NiLineData(lande_g=LANDE_LS)``.  The rest
+    wavelength is GONG's reference, 676.78 nm (air; NIST lists 676.7768 nm
+    air — the 3 pm, 1.4 km/s difference is the zero point of the GONG Doppler
+    scale, see `gongsynth.GONGInstrument`).
+
+    Parameters
+    ----------
+    **fields
+        Any field of `LineData` (defaults: the values above).
+
+    Examples
+    --------
+    >>> line = NiLineData()
+    >>> round(line.lower_energy_ev, 3), round(line.oscillator_strength, 4), line.lande
+    (1.826, 0.0068, 1.426)
+    """
+
+    name: str = "Ni I 676.8"
+    element: str = "Ni"
+    wavelength_nm: float = 676.78
+    log_gf: float = -2.17
+    lower_energy_cm: float = 14728.847
+    upper_energy_cm: float = 29500.690
+    ion_ground_cm: float = 61579.0
+    j_lower: float = 0
+    j_upper: float = 1
+    lande_lower: float = 0.0
+    lande_upper: float = LANDE_MEASURED
+    gamma_rad: float = 1.11e8
+
+
+#: Fe I 617.33 nm, HMI's line (a⁵P₁ → y⁵D°₀, 3d⁷(⁴F)4s → 3d⁶(⁵D)4s4p).
+#:
+#: Sources: air wavelength 617.33433 nm, the rest wavelength of HMI's pipeline
+#: and filter tuning (``lam0 = 6173.3433`` Å; Schou et al. 2012, Couvidat et
+#: al. 2012; Nave et al. 1994 measure 6173.3344 Å in the laboratory: the
+#: 0.43 km/s difference is HMI's Doppler zero point, as GONG's 676.78 nm is for
+#: Ni); levels 17 927.377 and 34 121.578 cm⁻¹ (2.223 eV; Nave et al. 1994 as
+#: listed by Barklem, Piskunov & O'Mara 2000, A&AS 142, 467), Fe II ground
+#: 63 737 cm⁻¹ (7.9024 eV, NIST ASD); log gf = −2.880 (VALD; Nave et al.
+#: 1994, the value Norton et al. 2006, Sol. Phys. 239, 69 use); J = 1 → 0:
+#: a normal triplet with ḡ = g(a⁵P₁) = 2.5 (LS coupling; the value Norton et al.
+#: 2006 and HMI's reduction use); van der Waals broadening by hydrogen from ABO
+#: theory, σ = 281 a₀², α = 0.266 (Barklem, Piskunov & O'Mara 2000), helium
+#: added as 0.42 n_He (Barklem's recipe); γ_rad = 10^8.31 s⁻¹ (log Γ_rad = 8.31,
+#: the VALD/Kurucz value of spectral-line lists for this line: not checked here
+#: against VALD itself; a factor 2 on it moves the disk-centre depth by < 0.2 %
+#: of I_c, ``tests/test_rt_lines.py``); quadratic Stark broadening in RH's approximation,
+#: as for Ni.
+FE_I_6173 = LineData(name="Fe I 617.3", element="Fe", wavelength_nm=617.33433, log_gf=-2.880,
+                     lower_energy_cm=17927.377, upper_energy_cm=34121.578, ion_ground_cm=63737.0,
+                     j_lower=1, j_upper=0, lande_lower=2.5, lande_upper=0.0, gamma_rad=10 ** 8.31,
+                     vdw_sigma=281.0, vdw_alpha=0.266)
+
+#: The lines gongsynth synthesises, by name (the first is the default).
+LINES = {"Ni I 676.8": NiLineData(), "Fe I 617.3": FE_I_6173}
+
+#: Name of the default line.
+DEFAULT_LINE = "Ni I 676.8"
+
+
+def get_line(line=None):
+    """
+    The `LineData` of a name in `LINES` (or a `LineData` itself).
+
+    Parameters
+    ----------
+    line : str, `LineData` or None
+        A key of `LINES` (e.g. ``"Fe I 617.3"``), a `LineData`, or None for
+        `DEFAULT_LINE`.
+
+    Returns
+    -------
+    `LineData`
+
+    Examples
+    --------
+    >>> get_line("Fe I 617.3").lande, get_line().wavelength_nm
+    (2.5, 676.78)
+    """
+    if line is None:
+        return LINES[DEFAULT_LINE]
+    if isinstance(line, LineData):
+        return line
+    if isinstance(line, str):
+        if line not in LINES:
+            raise ValueError(f"line must be one of {tuple(LINES)} or a LineData, got {line!r}")
+        return LINES[line]
+    raise TypeError(f"line must be a line name {tuple(LINES)}, a LineData or None, got {type(line).__name__}")

@@ -1,5 +1,5 @@
 r"""
-Continuum and Ni I line opacity in LTE (cgs), as numba point functions and numpy wrappers.
+Continuum and line opacity in LTE (cgs), as numba point functions and numpy wrappers.
 
 Continuum at wavelength λ (per cm, stimulated emission included):
 
@@ -11,13 +11,19 @@ Continuum at wavelength λ (per cm, stimulated emission included):
   fit as in Kurucz's ATLAS); scattering is counted as absorption with the LTE
   source function (S = B).
 
-Metal bound-free opacity is left out (< 1 % at 677 nm in the photosphere).
+Metal bound-free opacity is left out (< 1 % at 617–677 nm in the photosphere).
+The continuum is evaluated at the line's own rest wavelength.
 
-Line: the Ni I lower-level population from Saha–Boltzmann with the line's
-partition functions, the integrated cross-section π e²/(m_e c²) λ₀² f, Doppler
-width from temperature and microturbulence, Voigt damping from radiative, van
-der Waals (Unsöld) and quadratic Stark widths exactly as RH and Lightweaver
-compute them.  `line_constants` packs what the kernels need into one array.
+Line (any `~gongsynth.sun.rt.atomic_data.LineData`): the lower-level
+population from Saha–Boltzmann with the element's partition functions, the
+integrated cross-section π e²/(m_e c²) λ₀² f, Doppler width from temperature
+and microturbulence, Voigt damping from radiative, van der Waals and quadratic
+Stark widths.  Van der Waals: Unsöld's formula exactly as RH and Lightweaver
+compute it, or, where the line has Anstee–Barklem–O'Mara data (σ, α), the
+ABO full width per perturber 2 (4/π)^{α/2} Γ(2 − α/2) v₀ σ (v̄/v₀)^{1−α}
+(v₀ = 10 km/s, v̄ the mean H–atom relative speed; Anstee & O'Mara 1995,
+Barklem, Piskunov & O'Mara 2000), times n_H I + 0.42 n_He as Barklem's
+recipe adds helium.  `line_constants` packs what the kernels need into one array.
 """
 from __future__ import annotations
 
@@ -26,7 +32,7 @@ import math
 import numba as nb
 import numpy as np
 
-from gongsynth.sun.rt.atomic_data import ABUNDANCE, IONISATION_EV, NiLineData
+from gongsynth.sun.rt.atomic_data import ABUNDANCE, IONISATION_EV, get_line
 
 __all__ = ["line_constants", "point_opacity", "column_opacity", "continuum_opacity", "line_opacity",
            "planck", "LC_SIZE"]
@@ -47,22 +53,24 @@ _PF_LNT = np.linspace(math.log(1000.0), math.log(20000.0), 300)
 
 def line_constants(line=None):
     """
-    The Ni I line's constants in one float64 array (the kernels' input).
+    A line's constants in one float64 array (the kernels' input).
 
     Parameters
     ----------
-    line : `~gongsynth.sun.rt.atomic_data.NiLineData`, optional
-        Atomic data (default `NiLineData()`).
+    line : str or `~gongsynth.sun.rt.atomic_data.LineData`, optional
+        A line name of `~gongsynth.sun.rt.atomic_data.LINES` or atomic data
+        (default ``"Ni I 676.8"``).
 
     Returns
     -------
     constants : `numpy.ndarray`
-        (LC_SIZE,): λ₀ (cm), gf/g_l·(π e²/m_e c²)λ₀², g_l, E_l (eV), Ni abundance,
-        χ_Ni (eV), mass (g), γ_rad, van der Waals and Stark coefficients, Landé g.
+        (LC_SIZE,): λ₀ (cm), gf/g_l·(π e²/m_e c²)λ₀², g_l, E_l (eV), abundance,
+        χ (eV), mass (g), γ_rad, van der Waals and Stark coefficients, Landé g,
+        λ₀ (nm), the van der Waals temperature exponent (0.3 Unsöld, (1 − α)/2 ABO).
     pf_table : `numpy.ndarray`
-        (2, 300) log U of Ni I and Ni II on a uniform ln T grid 1000–20 000 K.
+        (2, 300) log U of the neutral and the ion on a uniform ln T grid 1000–20 000 K.
     """
-    line = NiLineData() if line is None else line
+    line = get_line(line)
     lam = line.wavelength_nm * 1e-7
     # Unsöld van der Waals (RH / Lightweaver form, SI constants, result for n_HI in cm⁻³).
     q, eps4, a0, hp, ryd = 1.60217663e-19, 4 * math.pi * 8.8541878128e-12, 5.29177211e-11, 6.62607015e-34, \
@@ -76,6 +84,16 @@ def line_constants(line=None):
     vrel_h = (8.0 * 1.380649e-23 / (math.pi * 1.66053907e-27 * mass) * (1.0 + mass / 1.007975)) ** 0.3
     vrel_he = (8.0 * 1.380649e-23 / (math.pi * 1.66053907e-27 * mass) * (1.0 + mass / 4.002602)) ** 0.3
     vdw = 8.08 * line.vdw_enhancement * (vrel_h + ABUNDANCE["He"] * vrel_he) * c625 * 1e6   # n in cm⁻³
+    vdw_exponent = 0.3
+    if line.vdw_sigma is not None:
+        # ABO: full width per H atom, SI → cm³ s⁻¹; v̄ = (8kT/πμ)^½ with μ the H–atom reduced mass.
+        alpha = line.vdw_alpha
+        v0 = 1e4
+        vbar_t = 8.0 * 1.380649e-23 / (math.pi * 1.66053907e-27) * (1.0 / 1.007975 + 1.0 / mass)  # v̄²/T
+        vdw = (2.0 * (4.0 / math.pi) ** (alpha / 2) * math.gamma(2.0 - alpha / 2) * v0
+               * line.vdw_sigma * a0 ** 2 * (vbar_t ** 0.5 / v0) ** (1.0 - alpha)
+               * (1.0 + 0.42 * ABUNDANCE["He"]) * 1e6)
+        vdw_exponent = 0.5 * (1.0 - alpha)
     # Quadratic Stark (RH / Lightweaver).
     e_ryd = ryd / (1.0 + 9.1093837e-31 / (mass * 1.66053907e-27))
     n_l = math.sqrt(e_ryd / (e_cont - e_lo))
@@ -87,9 +105,9 @@ def line_constants(line=None):
     stark = cstark * cm * (8.0 * 1.380649e-23 / (math.pi * 1.66053907e-27 * mass)) ** (1 / 6) * 1e6
     chi = IONISATION_EV[line.element] if line.partition_levels is None else line.ionisation_ev
     const = np.zeros(LC_SIZE)
-    const[:12] = (lam, _PI_RE * lam * lam * line.oscillator_strength, line.g_lower, line.lower_energy_ev,
-                  ABUNDANCE[line.element], chi, mass * _AMU, line.gamma_rad, vdw, stark, line.lande_g,
-                  line.wavelength_nm)
+    const[:13] = (lam, _PI_RE * lam * lam * line.oscillator_strength, line.g_lower, line.lower_energy_ev,
+                  ABUNDANCE[line.element], chi, mass * _AMU, line.gamma_rad, vdw, stark, line.lande,
+                  line.wavelength_nm, vdw_exponent)
     u1, u2 = line.partition_functions(np.exp(_PF_LNT))
     return const, np.ascontiguousarray(np.log(np.stack([u1, u2])))
 
@@ -190,7 +208,7 @@ def point_opacity(t, ne, nh, vturb, const, pf_table):
     dlam = lam / _C * math.sqrt(2.0 * _K * t / const[6] + vturb * vturb)
     kl = const[1] * n_low * stim / (_SQRT_PI * dlam)
     lnt = math.log(t)
-    gamma = const[7] + const[8] * math.exp(0.3 * lnt) * n_hi + const[9] * math.exp(lnt / 6.0) * ne
+    gamma = const[7] + const[8] * math.exp(const[12] * lnt) * n_hi + const[9] * math.exp(lnt / 6.0) * ne
     dnu = _C * dlam / (lam * lam)
     a = gamma / (4.0 * math.pi * dnu)
     return kc, kl, dlam, a, planck(lam, t)
@@ -234,7 +252,7 @@ def _continuum_many(lam, t, ne, nh, out):
 
 def line_opacity(temperature, electron_density, hydrogen_density, microturbulence=0.0, line=None):
     """
-    Line-centre opacity scale, Doppler width and damping of Ni I for arrays of points.
+    Line-centre opacity scale, Doppler width and damping of a line for arrays of points.
 
     Parameters
     ----------
@@ -242,7 +260,8 @@ def line_opacity(temperature, electron_density, hydrogen_density, microturbulenc
         K, cm⁻³, cm⁻³.
     microturbulence : array_like, optional
         km/s.
-    line : `~gongsynth.sun.rt.atomic_data.NiLineData`, optional
+    line : str or `~gongsynth.sun.rt.atomic_data.LineData`, optional
+        Default ``"Ni I 676.8"``.
 
     Returns
     -------

@@ -1,5 +1,5 @@
 """
-`synthesize`: LTE Stokes synthesis of Ni I 676.78 nm, Atmosphere → StokesCube.
+`synthesize`: LTE Stokes synthesis of a spectral line (Ni I 676.78 nm, Fe I 617.33 nm), Atmosphere → Stokes.
 
 Work is done in blocks of output rows (about `BLOCK_COLUMNS` rays at a time):
 sample every field along the block's rays (`~gongsynth.sun.rt.rays`), complete
@@ -15,7 +15,7 @@ import astropy.units as u
 import numpy as np
 
 from gongsynth.geometry import check_geometry, los_basis
-from gongsynth.sun.rt.atomic_data import NiLineData
+from gongsynth.sun.rt.atomic_data import get_line
 from gongsynth.sun.rt.eos import solve_state
 from gongsynth.sun.rt.kernels import solve_columns
 from gongsynth.sun.rt.opacity import column_opacity, continuum_opacity, line_constants
@@ -24,14 +24,44 @@ from gongsynth.sun.rt.truth import los_field_at_depth, truth_definition
 from gongsynth.sun.stokes import RADIANCE_UNIT, StokesCube
 from gongsynth.validation import check_wavelength_grid
 
-__all__ = ["synthesize", "reference_height", "BLOCK_COLUMNS"]
+__all__ = ["synthesize", "reference_height", "default_wavelength", "BLOCK_COLUMNS", "WINDOW_HALF_WIDTH",
+           "WINDOW_POINTS"]
 
 #: Rays per block.
 BLOCK_COLUMNS = 8192
 
 
-def _default_wavelength():
-    return np.linspace(676.73, 676.83, 51) * u.nm
+#: Half width (nm) and points of the default wavelength grid: the paper's 51 points over ±0.05 nm.
+WINDOW_HALF_WIDTH = 0.05
+WINDOW_POINTS = 51
+
+
+def default_wavelength(line=None):
+    """
+    The default spectral grid of a line: `WINDOW_POINTS` air wavelengths, ±`WINDOW_HALF_WIDTH` nm about it.
+
+    For Ni I 676.78 nm this is the paper's grid, 676.73–676.83 nm in 2 pm steps.
+
+    Parameters
+    ----------
+    line : str or `~gongsynth.sun.rt.atomic_data.LineData`, optional
+        Default ``"Ni I 676.8"``.
+
+    Returns
+    -------
+    `~astropy.units.Quantity`
+        nm.
+
+    Examples
+    --------
+    >>> w = default_wavelength("Fe I 617.3")
+    >>> w.size, round(float(w[25].value), 5)
+    (51, 617.33433)
+    """
+    lam0 = get_line(line).wavelength_nm
+    # Rounded ends: the paper's grid bit for bit for Ni (676.78 - 0.05 is not 676.73 in floating point).
+    return np.linspace(round(lam0 - WINDOW_HALF_WIDTH, 9), round(lam0 + WINDOW_HALF_WIDTH, 9),
+                       WINDOW_POINTS) * u.nm
 
 
 def _state(atm, sample, nz):
@@ -51,7 +81,8 @@ def reference_height(atmosphere, line=None, max_columns=4096):
     Parameters
     ----------
     atmosphere : `~gongsynth.Atmosphere`
-    line : `~gongsynth.sun.rt.atomic_data.NiLineData`, optional
+    line : str or `~gongsynth.sun.rt.atomic_data.LineData`, optional
+        The continuum is taken at its wavelength (default ``"Ni I 676.8"``).
     max_columns : int
         Columns used (a regular subsample of the box).
 
@@ -60,7 +91,7 @@ def reference_height(atmosphere, line=None, max_columns=4096):
     float
         km.
     """
-    line = NiLineData() if line is None else line
+    line = get_line(line)
     nz, ny, nx = atmosphere.shape
     step = max(1, int(np.ceil(np.sqrt(ny * nx / max_columns))))
     rows = np.arange(0, ny, step, dtype=np.int64)
@@ -91,7 +122,7 @@ def reference_height(atmosphere, line=None, max_columns=4096):
 def synthesize(atmosphere, *, mu=1.0, azimuth=0 * u.deg, wavelength=None, truth="paper", progress=True,
                line=None, rays="inclined"):
     """
-    Polarised LTE synthesis of Ni I 676.78 nm along (inclined) rays through an Atmosphere.
+    Polarised LTE synthesis of a spectral line along (inclined) rays through an Atmosphere.
 
     Parameters
     ----------
@@ -104,14 +135,22 @@ def synthesize(atmosphere, *, mu=1.0, azimuth=0 * u.deg, wavelength=None, truth=
         ``los_azimuth`` of `gongsynth.geometry`; the pipeline's region north of
         disk centre is −90°).  Default 0°.
     wavelength : `~astropy.units.Quantity`, optional
-        Air wavelengths (default: the paper's 51 points 676.73–676.83 nm).
+        Air wavelengths (default `default_wavelength` of the line: 51 points
+        over ±0.05 nm, for Ni I the paper's 676.73–676.83 nm).
     truth : str or `~astropy.units.Quantity`, optional
-        ``"paper"`` (default: B·n at τ_c = 1 along the ray + 175 km, ±75 km
-        mean), ``"tau0.1"``, ``"core"`` or a height; see `gongsynth.sun.rt.truth`.
+        ``"paper"`` (default, for every line: B·n at τ_c = 1 along the ray +
+        175 km, ±75 km mean, τ_c the continuum at the line's own wavelength),
+        ``"tau0.1"``, ``"core"`` (the line's own formation height: B·n where
+        the optical depth at its rest wavelength along the ray is 1) or a
+        height; see `gongsynth.sun.rt.truth`.
     progress : bool, optional
         Show a progress bar over blocks of rays.
-    line : `~gongsynth.sun.rt.atomic_data.NiLineData`, optional
-        Atomic data (default `NiLineData()`: g = 1.5).
+    line : str or `~gongsynth.sun.rt.atomic_data.LineData`, optional
+        A name of `~gongsynth.sun.rt.atomic_data.LINES` (``"Ni I 676.8"``,
+        the default, or ``"Fe I 617.3"``) or atomic data.  Each named line
+        carries its measured effective Landé factor (Ni I 1.426, Fe I 2.5);
+        the paper's Ni I synthesis used 1.5:
+        ``line=NiLineData(lande_g=1.5)``.
     rays : {"inclined", "vertical"}, optional
         ``"inclined"`` (default): each ray crosses the 3-D box along the line
         of sight.  ``"vertical"``: each ray stays inside its own column, read
@@ -146,10 +185,8 @@ def synthesize(atmosphere, *, mu=1.0, azimuth=0 * u.deg, wavelength=None, truth=
 
     if not isinstance(atmosphere, Atmosphere):
         raise TypeError(f"atmosphere must be a gongsynth.Atmosphere, got {type(atmosphere).__name__}")
-    line = NiLineData() if line is None else line
-    if not isinstance(line, NiLineData):
-        raise TypeError(f"line must be a NiLineData or None, got {type(line).__name__}")
-    wavelength = _default_wavelength() if wavelength is None else wavelength
+    line = get_line(line)
+    wavelength = default_wavelength(line) if wavelength is None else wavelength
     check_wavelength_grid(wavelength, line.wavelength_nm * u.nm)
     mu_value, az = check_geometry(mu, azimuth, atmosphere.shape[1:])
     if np.ndim(mu_value) or np.ndim(az):
@@ -214,10 +251,11 @@ def synthesize(atmosphere, *, mu=1.0, azimuth=0 * u.deg, wavelength=None, truth=
             dst[sl] = src.reshape(rows.size, nx, -1)
         blos[sl] = tb.reshape(rows.size, nx)
         anchor[sl] = th.reshape(rows.size, nx)
-    meta = {"origin": "gongsynth.rt.synthesize", "method": "LTE, DELO-linear, Ni I 676.78 nm",
+    meta = {"origin": "gongsynth.rt.synthesize", "method": f"LTE, DELO-linear, {line.name}",
+            "line": line.name, "line_wavelength_nm": float(line.wavelength_nm),
             "mu": mu_value, "los_azimuth_deg": float(np.degrees(az)), "truth": str(truth), "rays": rays,
             "reference_height_km": z_ref, "truth_anchor_mean_km": float(anchor.mean()),
-            "lande_g": float(line.lande_g), "atmosphere": dict(atmosphere.meta)}
+            "lande_g": line.lande, "atmosphere": dict(atmosphere.meta)}
     return StokesCube(*(u.Quantity(a, RADIANCE_UNIT, copy=False) for a in out), wavelength,
                       atmosphere.pixel_size, mu=mu_value, blos=blos * u.G, meta=meta)
 
