@@ -174,12 +174,12 @@ def _run_simulate(args):
     from gongsynth.pipeline import simulate, simulate_many
     from gongsynth.products.output import check_output_folder
     from gongsynth.resources import check_disk_space, check_resources
-    from gongsynth.sun.atmosphere import Atmosphere
 
     config = _simulation_config(args)
     progress = not args.quiet
     # Read once for all latitudes of a sweep (the config records the path).
-    atmosphere = Atmosphere.read(config.atmosphere_file) if config.atmosphere_file else None
+    atmosphere = _read_atmosphere(config.atmosphere_file, "--atmosphere" if args.atmosphere else
+                                  "atmosphere_file") if config.atmosphere_file else None
     state = {"written": [], "saving": None}
     try:
         if args.latitude and len(args.latitude) > 1:
@@ -221,6 +221,17 @@ def _run_simulate(args):
         exc.add_note(_what_was_written(state))
         raise
     return EXIT_OK
+
+
+def _read_atmosphere(path, name):
+    """The input atmosphere, a bad one named by its argument (exit 2)."""
+    from gongsynth.sun.atmosphere import Atmosphere
+
+    try:
+        return Atmosphere.read(path)
+    except (ValueError, TypeError, KeyError) as exc:
+        message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
+        raise ValueError(f"{name} {path}: {message}") from exc
 
 
 def _what_was_written(state):
