@@ -110,3 +110,125 @@ def test_fast_solver_matches_reference_up_to_the_velocity_limit():
     scale = results[1][0].max()
     for fast, ref in zip(*results):
         assert np.abs(fast - ref).max() < 1e-4 * scale
+
+
+# ----------------------------------------------------------------- 3, 4 the library cache
+TINY_LIBRARY = dict(shape=(16, 16), pixel_size=6 * u.Mm, seeds_per_level=(1, 1, 1, 1), theta=(0, 40, 80), seed=3)
+
+
+@pytest.fixture(scope="module")
+def tiny_library():
+    from gongsynth.stages.scene.library import build_library
+
+    return build_library(**TINY_LIBRARY)
+
+
+@pytest.fixture
+def cache(tmp_path, monkeypatch, tiny_library):
+    """
+    An empty disk cache, a process that has loaded nothing yet, and a builder that hands out the
+    tiny library built once (the cache's logic is under test here, not the build).
+    """
+    import gongsynth.stages.scene.library as library_module
+
+    folder = tmp_path / "cache"
+    monkeypatch.setenv("GONGSYNTH_CACHE_DIR", str(folder))
+    monkeypatch.setattr(library_module, "_MEMO", {})
+    monkeypatch.setattr(library_module, "_VERIFIED", set())
+    monkeypatch.setattr(library_module, "build_library", lambda **arguments: tiny_library)
+
+    def new_process():
+        library_module._MEMO.clear()
+        library_module._VERIFIED.clear()
+
+    return folder, new_process
+
+
+def _entry(folder):
+    (entry,) = [p for p in folder.iterdir() if ".tmp-" not in p.name]
+    return entry
+
+
+@pytest.mark.parametrize("damage", ["scaled", "bit rot", "truncated", "missing"])
+def test_a_damaged_cache_entry_is_detected_rebuilt_and_replaced(cache, damage):
+    from gongsynth.stages.scene.library import CacheWarning, cached_library
+
+    folder, new_process = cache
+    built = cached_library(**TINY_LIBRARY)
+    patches = _entry(folder) / "patches.npy"
+    if damage == "scaled":      # the audit's case: a plausible library, 30 % brighter
+        np.save(patches, np.load(patches) * 1.3)
+    elif damage == "bit rot":
+        data = bytearray(patches.read_bytes())
+        data[-5] ^= 0x40
+        patches.write_bytes(bytes(data))
+    elif damage == "truncated":
+        patches.write_bytes(patches.read_bytes()[:1000])
+    else:
+        patches.unlink()
+    new_process()
+    with pytest.warns(CacheWarning, match="damaged.*rebuilt and replaced"):
+        again = cached_library(**TINY_LIBRARY)
+    assert np.array_equal(again.patches, built.patches)
+    new_process()
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", CacheWarning)     # repaired: loaded quietly, the same numbers
+        loaded = cached_library(**TINY_LIBRARY)
+    assert "cache" in loaded.meta and np.array_equal(loaded.patches, built.patches)
+    assert [p.name for p in folder.iterdir()] == [_entry(folder).name]
+
+
+def test_stale_temporaries_of_killed_saves_are_removed(cache):
+    import os
+    import subprocess
+    import sys
+
+    from gongsynth.stages.scene.library import cached_library
+
+    folder, _ = cache
+    folder.mkdir()
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True).stdout.strip()
+    stale = folder / f"library-0123.tmp-{dead}-abcd"
+    live = folder / f"library-4567.tmp-{os.getpid()}-efgh"
+    for tmp in (stale, live):
+        tmp.mkdir()
+        (tmp / "patches.npy").write_bytes(b"\0" * 100)
+        os.utime(tmp, (0.0 + 10**9, 0.0 + 10**9) if tmp is stale else None)
+    cached_library(**TINY_LIBRARY)
+    assert not stale.exists() and live.exists()
+
+
+@pytest.mark.parametrize("kind", ["plain file", "read-only"])
+def test_an_unwritable_cache_is_a_warning_and_the_run_goes_on(cache, kind, monkeypatch):
+    import errno
+    import tempfile
+
+    from gongsynth.stages.scene.library import CacheWarning, cached_library
+
+    folder, _ = cache
+    if kind == "plain file":
+        folder.write_text("not a folder")
+    else:   # as a read-only file system answers (chmod would not stop root)
+        def refuse(*args, **kwargs):
+            raise OSError(errno.EROFS, "Read-only file system", kwargs.get("dir"))
+        monkeypatch.setattr(tempfile, "mkdtemp", refuse)
+    with pytest.warns(CacheWarning, match="could not write the patch library.*in memory"):
+        library = cached_library(**TINY_LIBRARY)
+    assert library.patches.size and "cache" not in library.meta
+
+
+def test_cli_full_disk_with_an_unwritable_cache_runs(cache, tmp_path, monkeypatch):
+    """The audit's case: a cache path that is a plain file gave exit 3, a read-only one exit 1."""
+    import gongsynth.chain as chain_module
+    import gongsynth.stages.scene.library as library_module
+
+    folder, _ = cache
+    folder.write_text("")
+    real = library_module.cached_library
+    monkeypatch.setattr(chain_module, "cached_library", lambda **arguments: real(**TINY_LIBRARY))
+    with pytest.warns(library_module.CacheWarning):
+        code = main(["simulate", "--mode", "full-disk", "--shape", "32", "--duration", "1", "--seed", "1",
+                     "--quiet", "--out", str(tmp_path / "x")])
+    assert code == 0 and (tmp_path / "x" / "magnetogram.fits").is_file()
