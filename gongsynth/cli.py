@@ -171,7 +171,7 @@ def _simulation_config(args):
 
 
 def _run_simulate(args):
-    from gongsynth.pipeline import simulate, simulate_many
+    from gongsynth.pipeline import simulate, simulate_each
     from gongsynth.products.output import check_output_folder
     from gongsynth.resources import check_disk_space, check_resources
 
@@ -190,22 +190,31 @@ def _run_simulate(args):
                                  f"would share an output folder; give distinct latitudes")
             # Refuse before hours of computing, not after.
             configs = [config.replace(latitude=lat) for lat in latitudes]
-            for cfg in configs:
-                check_resources(cfg)
             check_output_folder(args.out, overwrite=True, name="--out")
-            for folder in folders:
+            configs = _adopt_seed(args, configs, folders)
+            todo = []
+            for cfg, folder in zip(configs, folders):
+                if not args.overwrite and _holds_run(folder, cfg):   # a rerun completes an interrupted sweep
+                    _say(args, f"latitude {cfg.latitude:.1f}: {folder} is complete already (kept)")
+                    continue
+                check_resources(cfg)
                 check_output_folder(folder, overwrite=args.overwrite, name="--out")
-            check_disk_space(configs, args.out)
-            if atmosphere is None:
-                results = simulate_many(latitudes=latitudes, config=config, workers=args.workers,
-                                        progress=progress)
-            else:  # each latitude synthesises the atmosphere along its own rays
-                results = (simulate(atmosphere, config=cfg, progress=progress) for cfg in configs)
-            for result, folder in zip(results, folders):
+                todo.append((cfg, folder))
+            check_disk_space([cfg for cfg, _ in todo], args.out)
+            failed = []
+            runs = simulate_each([cfg for cfg, _ in todo], stokes=atmosphere, workers=args.workers,
+                                 progress=progress)
+            for index, result in runs:   # each set saved as soon as its run is done
+                cfg, folder = todo[index]
+                if isinstance(result, BaseException):
+                    failed.append((cfg, result))
+                    continue
                 state["saving"] = folder
                 result.save(folder, overwrite=args.overwrite)
                 state["written"].append(folder)
                 _say(args, f"latitude {result.config.latitude:.1f}: wrote {folder}")
+            if failed:
+                return _sweep_failures(failed, state)
         else:
             check_resources(config)
             check_output_folder(args.out, overwrite=args.overwrite, name="--out")
@@ -232,6 +241,54 @@ def _read_atmosphere(path, name):
     except (ValueError, TypeError, KeyError) as exc:
         message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
         raise ValueError(f"{name} {path}: {message}") from exc
+
+
+def _adopt_seed(args, configs, folders):
+    """
+    Without a seed given, a rerun of a sweep takes the seed of its finished runs (every run of a
+    sweep shares one), so that it completes the same sweep.
+    """
+    import tomllib
+
+    if args.seed is not None or (args.config is not None and "seed" in tomllib.loads(
+            Path(args.config).read_text()).get("simulation", {})):
+        return configs
+    for cfg, folder in zip(configs, folders):
+        saved = _saved_config(folder)
+        if saved is not None and saved == cfg.replace(seed=saved.seed):
+            return [c.replace(seed=saved.seed) for c in configs]
+    return configs
+
+
+def _saved_config(folder):
+    """The configuration of the complete set in ``folder`` (None if there is none)."""
+    from gongsynth.config import SimulationConfig
+    from gongsynth.products.output import CONFIG_FILE, clean_leftovers
+
+    if not (folder / CONFIG_FILE).is_file():
+        return None
+    clean_leftovers(folder)       # an interrupted save is finished first (the sets are atomic)
+    try:
+        return SimulationConfig.from_toml(folder / CONFIG_FILE)
+    except (OSError, ValueError, TypeError, KeyError, u.UnitsError):
+        return None
+
+
+def _holds_run(folder, config):
+    """Whether ``folder`` holds the complete set of this very run."""
+    from gongsynth.products.output import planned_files
+
+    saved = _saved_config(folder)
+    return saved == config and all(p.is_file() for p in planned_files(folder, quicklook=False, truth=False))
+
+
+def _sweep_failures(failed, state):
+    """Report the runs of a sweep that failed (the others are saved) and return the exit code."""
+    lines = [f"latitude {cfg.latitude:.1f}: {_describe(exc)[0]}" for cfg, exc in failed]
+    done = ", ".join(str(f) for f in state["written"]) or "none"
+    _fail(f"{len(failed)} run(s) of the sweep failed ({'; '.join(lines)}); complete sets written: {done}; "
+          f"run the same command again to compute only the missing ones", 0)
+    return max(_describe(exc)[1] for _, exc in failed)
 
 
 def _what_was_written(state):
@@ -319,23 +376,33 @@ def main(argv=None):
         if args.command == "calibrate":
             return _run_calibrate(args)
         return _run_compare(args)
-    except FileExistsError as exc:
-        return _fail(f"{exc}", EXIT_EXISTS)
-    except FileNotFoundError as exc:
-        return _fail(f"file not found: {exc.filename or exc}", EXIT_USAGE)
-    except (IsADirectoryError, NotADirectoryError, PermissionError) as exc:
-        return _fail(_with_notes(f"error: {exc}", exc), EXIT_USAGE)
-    except (ValueError, TypeError, KeyError, u.UnitsError) as exc:
+    except (OSError, ValueError, TypeError, KeyError, u.UnitsError, CannotRunHereError, MemoryError,
+            KeyboardInterrupt) as exc:
+        return _fail(*_describe(exc))
+
+
+def _describe(exc):
+    """The message and exit code of a failure (the README's table of exit codes)."""
+    if isinstance(exc, FileExistsError):
+        return f"{exc}", EXIT_EXISTS
+    if isinstance(exc, FileNotFoundError):
+        return f"file not found: {exc.filename or exc}", EXIT_USAGE
+    if isinstance(exc, (IsADirectoryError, NotADirectoryError, PermissionError)):
+        return _with_notes(f"error: {exc}", exc), EXIT_USAGE
+    if isinstance(exc, (ValueError, TypeError, KeyError, u.UnitsError)):
         # A KeyError's str() is the repr of its message: print the message itself.
         message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
-        return _fail(f"error: {message}", EXIT_USAGE)
-    except (CannotRunHereError, MemoryError) as exc:
-        return _fail(f"cannot run here: {exc or 'out of memory'}", EXIT_CANNOT_RUN)
-    except KeyboardInterrupt as exc:
-        return _fail(_with_notes("interrupted", exc), EXIT_INTERRUPTED)
-    except OSError as exc:  # a full disk, an I/O error: the output sets are atomic
+        return f"error: {message}", EXIT_USAGE
+    if isinstance(exc, (CannotRunHereError, MemoryError)):
+        what = str(exc) or ("out of memory: use a smaller --shape, a shorter --duration or fewer --workers, "
+                            "or a machine with more memory")
+        return f"cannot run here: {what}", EXIT_CANNOT_RUN
+    if isinstance(exc, KeyboardInterrupt):
+        return _with_notes("interrupted", exc), EXIT_INTERRUPTED
+    if isinstance(exc, OSError):  # a full disk, an I/O error: the output sets are atomic
         where = f" ({exc.filename})" if exc.filename else ""
-        return _fail(_with_notes(f"error: {exc.strerror or exc}{where}", exc), EXIT_FAILURE)
+        return _with_notes(f"error: {exc.strerror or exc}{where}", exc), EXIT_FAILURE
+    return f"error: {type(exc).__name__}: {exc}", EXIT_FAILURE
 
 
 def _with_notes(message, exc):

@@ -22,7 +22,7 @@ from gongsynth.resources import check_resources
 from gongsynth.sun.atmosphere import Atmosphere
 from gongsynth.version import version as __version__
 
-__all__ = ["SimulationResult", "Sweep", "simulate", "simulate_many"]
+__all__ = ["SimulationResult", "Sweep", "simulate", "simulate_many", "simulate_each"]
 
 @dataclass
 class SimulationResult:
@@ -384,8 +384,6 @@ def simulate_many(*, latitudes=(0, 25, 45, 60, 70, 75) * u.deg, seeds=None, conf
     >>> [float(r.config.latitude.value) for r in runs], runs[0].config.seed == runs[1].config.seed
     ([0.0, 45.0], True)
     """
-    from tqdm.auto import tqdm
-
     latitudes = u.Quantity(latitudes, u.deg).ravel()
     if config is None:
         config = SimulationConfig.from_arguments(**_config_kwargs(kwargs))
@@ -399,25 +397,75 @@ def simulate_many(*, latitudes=(0, 25, 45, 60, 70, 75) * u.deg, seeds=None, conf
     configs = [config.replace(latitude=lat, seed=int(s)) for lat, s in zip(latitudes, seeds)]
     check_resources(config)
 
-    if client is None and (workers is None or workers <= 1):
-        return Sweep(simulate(config=c, progress=False)
-                     for c in tqdm(configs, disable=not progress, desc="sweep"))
-    distributed = import_optional("dask.distributed", "dask")
-    Client, LocalCluster = distributed.Client, distributed.LocalCluster
-    as_completed = distributed.as_completed
+    results = [None] * len(configs)
+    for index, result in simulate_each(configs, client=client, workers=workers, progress=progress):
+        if isinstance(result, BaseException):
+            raise result
+        results[index] = result
+    return Sweep(results)
 
+
+def simulate_each(configs, *, stokes=None, client=None, workers=None, progress=True):
+    """
+    Run several configurations and yield each result as soon as it is done (to save it at once).
+
+    A run that fails does not stop the others: its exception is yielded in
+    place of its result (Ctrl-C stops them all).
+
+    Parameters
+    ----------
+    configs : sequence of `~gongsynth.config.SimulationConfig`
+    stokes : `~gongsynth.StokesCube` or `~gongsynth.Atmosphere`, optional
+        The input Sun of every run (then they run serially, in this process).
+    client : `dask.distributed.Client`, optional
+        Run on this client.
+    workers : int, optional
+        Without a client: this many local Dask worker processes (``None`` or 1: serially).
+    progress : bool
+        A progress bar over the runs.
+
+    Yields
+    ------
+    (int, `SimulationResult` or Exception)
+        The run's index in ``configs`` and its result, in the order the runs finish.
+
+    Examples
+    --------
+    >>> import astropy.units as u
+    >>> from gongsynth.config import SimulationConfig
+    >>> base = SimulationConfig(seed=2, detector_shape=16, duration=1 * u.min, resolutions=(1,),
+    ...                         photosphere_shape=(64, 64), photosphere_pixel_size=1536 * u.km,
+    ...                         sun="milne-eddington")
+    >>> [i for i, r in simulate_each([base, base.replace(latitude=45 * u.deg)], progress=False)]
+    [0, 1]
+    """
+    from tqdm.auto import tqdm
+
+    configs = list(configs)
+    bar = tqdm(total=len(configs), disable=not progress, desc="sweep")
+    if stokes is not None or (client is None and (workers is None or workers <= 1)):
+        for index, config in enumerate(configs):
+            try:
+                result = simulate(stokes, config=config, progress=False)
+            except Exception as exc:  # noqa: BLE001 - reported with its run; Ctrl-C still stops the sweep
+                result = exc
+            bar.update()
+            yield index, result
+        bar.close()
+        return
+    distributed = import_optional("dask.distributed", "dask")
     own = client is None
     if own:
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               dashboard_address=None)
-        client = Client(cluster)
+        cluster = distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                           dashboard_address=None)
+        client = distributed.Client(cluster)
     try:
-        futures = [client.submit(simulate, config=c, progress=False, pure=False) for c in configs]
-        bar = tqdm(total=len(futures), disable=not progress, desc="sweep")
-        for _ in as_completed(futures):
+        futures = {client.submit(simulate, config=c, progress=False, pure=False): i
+                   for i, c in enumerate(configs)}
+        for future in distributed.as_completed(futures):
             bar.update()
+            yield futures[future], (future.exception() if future.status == "error" else future.result())
         bar.close()
-        return Sweep(client.gather(futures))
     finally:
         if own:
             client.close()

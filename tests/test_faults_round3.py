@@ -232,3 +232,57 @@ def test_cli_full_disk_with_an_unwritable_cache_runs(cache, tmp_path, monkeypatc
         code = main(["simulate", "--mode", "full-disk", "--shape", "32", "--duration", "1", "--seed", "1",
                      "--quiet", "--out", str(tmp_path / "x")])
     assert code == 0 and (tmp_path / "x" / "magnetogram.fits").is_file()
+
+
+# ----------------------------------------------------------------- 5 sweeps keep finished runs
+def _small_toml(tmp_path, seed=None):
+    """A quick tiled run's configuration; without a seed the file leaves it unset (fresh each run)."""
+    from gongsynth.config import SimulationConfig
+
+    cfg = SimulationConfig(seed=seed or 1, sun="milne-eddington", duration=1 * u.min, detector_shape=16,
+                           resolutions=(1,), photosphere_shape=(64, 64), photosphere_pixel_size=1536 * u.km)
+    path = tmp_path / "small.toml"
+    path.write_text(cfg.to_toml(template=seed is None))
+    return path
+
+
+def _counting_simulate(monkeypatch, fail=None, exc=None):
+    """Count the runs of `simulate` by latitude (at its first step), raising ``exc`` at latitude ``fail``."""
+    import gongsynth.pipeline as pipeline
+
+    real, calls = pipeline.check_resources, []
+
+    def first_step(config):
+        calls.append(float(config.latitude.to_value(u.deg)))
+        if fail is not None and calls[-1] == fail:
+            raise exc
+        return real(config)
+
+    monkeypatch.setattr(pipeline, "check_resources", first_step)
+    return calls
+
+
+@pytest.mark.parametrize(("exc", "code", "words"), [
+    (RuntimeError("the camera broke"), 1, "1 run(s) of the sweep failed (latitude 30.0 deg: error: RuntimeError"),
+    (KeyboardInterrupt(), 130, "interrupted"),
+])
+def test_a_sweep_keeps_each_finished_run_and_a_rerun_completes_it(tmp_path, monkeypatch, capsys, exc, code,
+                                                                    words):
+    from gongsynth.config import SimulationConfig
+
+    config = _small_toml(tmp_path)        # no seed: the rerun takes the finished runs' one
+    lats = ["0", "30", "60"] if code == 130 else ["30", "0"]     # a failure: the next run still goes
+    argv = ["simulate", "--config", str(config), "--latitude", *lats, "--quiet", "--out", str(tmp_path / "s")]
+    calls = _counting_simulate(monkeypatch, fail=30.0, exc=exc)
+    assert main(argv) == code
+    err = capsys.readouterr().err
+    assert words in err and str(tmp_path / "s" / "lat+000.000") in err
+    done = sorted(p.name for p in (tmp_path / "s").iterdir())
+    assert done == ["lat+000.000"]
+    seed = SimulationConfig.from_toml(tmp_path / "s" / "lat+000.000" / "config.toml").seed
+    monkeypatch.undo()
+    calls = _counting_simulate(monkeypatch)
+    assert main(argv) == 0
+    assert calls == ([30.0] if code == 1 else [30.0, 60.0])     # only the missing runs
+    for lat in ("000", "030", "060")[:len(lats)]:
+        assert SimulationConfig.from_toml(tmp_path / "s" / f"lat+{lat}.000" / "config.toml").seed == seed
