@@ -134,6 +134,8 @@ def build_parser():
     cal.add_argument("--out", type=Path, required=True, help="the calibrated map (FITS)")
     cal.add_argument("--table", type=Path, help="calibration table (ECSV; default: the shipped one)")
     cal.add_argument("--overwrite", action="store_true", help="replace an existing output file")
+    cal.add_argument("--force", action="store_true",
+                     help="calibrate even a map calibrated already (the correction compounds) or a truth map")
 
     cfg = sub.add_parser("config", help="print the default configuration as TOML")
     cfg.add_argument("--print-defaults", action="store_true", required=True,
@@ -326,7 +328,7 @@ def _run_calibrate(args):
 
     check_writable([args.out], args.overwrite)
     smap = load_observation(args.magnetogram)
-    calibrated = calibrate(smap, table=args.table)
+    calibrated = calibrate(smap, table=args.table, force=args.force)
     with atomic_path(args.out, overwrite=args.overwrite) as tmp:
         calibrated.save(tmp, overwrite=True)  # the temporary file exists already
     both = np.isfinite(smap.data) & np.isfinite(calibrated.data)

@@ -286,3 +286,33 @@ def test_a_sweep_keeps_each_finished_run_and_a_rerun_completes_it(tmp_path, monk
     assert calls == ([30.0] if code == 1 else [30.0, 60.0])     # only the missing runs
     for lat in ("000", "030", "060")[:len(lats)]:
         assert SimulationConfig.from_toml(tmp_path / "s" / f"lat+{lat}.000" / "config.toml").seed == seed
+
+
+# ----------------------------------------------------------------- 6 calibration does not compound
+@pytest.fixture(scope="module")
+def small_run(tmp_path_factory):
+    """A saved quick tiled run (magnetogram, truth maps, raw planes, config)."""
+    folder = tmp_path_factory.mktemp("run")
+    toml = _small_toml(folder, seed=4)
+    assert main(["simulate", "--config", str(toml), "--quiet", "--out", str(folder / "run")]) == 0
+    return folder / "run"
+
+
+def test_calibrate_refuses_a_calibrated_map_unless_forced(tmp_path, capsys):
+    from .realdata import real_file
+
+    source = real_file("gong/mrbqs221029t0304c2263_067.fits")
+    once, twice = tmp_path / "once.fits", tmp_path / "twice.fits"
+    assert main(["calibrate", str(source), "--out", str(once)]) == 0
+    capsys.readouterr()
+    assert main(["calibrate", str(once), "--out", str(twice)]) == 2
+    assert "calibrated already (CALTABLE" in capsys.readouterr().err and not twice.exists()
+    assert main(["calibrate", str(once), "--out", str(twice), "--force"]) == 0
+
+
+@pytest.mark.parametrize("product", ["truth.fits", "truth_psf.fits"])
+def test_calibrate_refuses_a_truth_map_unless_forced(small_run, tmp_path, capsys, product):
+    out = tmp_path / "cal.fits"
+    assert main(["calibrate", str(small_run / product), "--out", str(out)]) == 2
+    assert "ground-truth map" in capsys.readouterr().err and not out.exists()
+    assert main(["calibrate", str(small_run / "magnetogram.fits"), "--out", str(out)]) == 0
