@@ -173,7 +173,7 @@ def _simulation_config(args):
 
 
 def _run_simulate(args):
-    from gongsynth.pipeline import simulate, simulate_each
+    from gongsynth.pipeline import check_scene, simulate, simulate_each
     from gongsynth.products.output import check_output_folder
     from gongsynth.resources import check_disk_space, check_resources
 
@@ -200,6 +200,7 @@ def _run_simulate(args):
                     _say(args, f"latitude {cfg.latitude:.1f}: {folder} is complete already (kept)")
                     continue
                 check_resources(cfg)
+                check_scene(cfg, atmosphere)
                 check_output_folder(folder, overwrite=args.overwrite, name="--out")
                 todo.append((cfg, folder))
             check_disk_space([cfg for cfg, _ in todo], args.out)
@@ -219,6 +220,7 @@ def _run_simulate(args):
                 return _sweep_failures(failed, state)
         else:
             check_resources(config)
+            check_scene(config, atmosphere)
             check_output_folder(args.out, overwrite=args.overwrite, name="--out")
             check_disk_space([config], args.out)
             result = simulate(atmosphere, config=config, progress=progress)

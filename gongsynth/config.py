@@ -9,6 +9,8 @@ Sun chosen by ``sun`` (``[photosphere]``) and a `~gongsynth.GONGInstrument`
 that name the key.
 """
 import dataclasses
+import datetime
+import math
 import numbers
 import tomllib
 from dataclasses import dataclass, field, fields
@@ -25,7 +27,7 @@ from gongsynth.instrument import GONGInstrument
 from gongsynth.observing import GONG_SITES, check_site, like_gong
 from gongsynth.seeding import root_seed
 from gongsynth.stages.camera.integrate import ENGINES
-from gongsynth.stages.camera.schedule import n_frames_in
+from gongsynth.stages.camera.schedule import frame_schedule
 from gongsynth.suns import DEFAULT_SUNS, SUNS, default_sun, photosphere_defaults, run_grid_default
 from gongsynth.tomlfmt import toml_table
 
@@ -165,6 +167,46 @@ def _pointing(value, mode):
         raise ValueError(f"pointing (Tx, Ty) = {both} moves a full-disk detector; a tiled run points at "
                          f"its latitude (mode = {mode!r})")
     return tuple(both.to(u.arcsec))
+
+
+def _check_timing(duration, instrument):
+    """The duration and the instrument's timing give every accumulation plane frames (before computing)."""
+    try:
+        frames = frame_schedule(duration, instrument).frames_per_plane
+    except ValueError as exc:
+        raise ValueError(f"duration = {duration} with this instrument's timing: {exc}") from exc
+    if min(frames) < 1:
+        both = (2 * instrument.lcvr_period).to(u.min)
+        raise ValueError(f"duration = {duration} leaves accumulation plane(s) without a frame "
+                         f"(frames per plane {list(map(int, frames))}): it must cover both LCVR states, "
+                         f"at least 2 × lcvr_period = {both:.4g}")
+
+
+def _check_dates(obstime, duration):
+    """Start and end of the observation within the years a FITS date can hold (0001-9999)."""
+    import warnings
+
+    with warnings.catch_warnings():    # ERFA's "dubious year" far from now: the check below says more
+        warnings.simplefilter("ignore")
+        start = Time(obstime)
+        years = start.ymdhms.year, (start + duration).ymdhms.year
+    if not (1 <= years[0] and years[1] <= 9999):
+        raise ValueError(f"obstime = {obstime!r} with duration {duration}: the observation must lie "
+                         f"within the years 0001-9999 (the FITS date format)")
+
+
+def _check_on_disk(pointing, obstime, instrument, pixels):
+    """A full-disk detector pointed where it sees part of the solar disk."""
+    from sunpy.coordinates import sun
+
+    half = (instrument.plate_scale * pixels / 2).to_value(u.arcsec)
+    radius = sun.angular_radius(Time(obstime)).to_value(u.arcsec)
+    tx, ty = (abs(p.to_value(u.arcsec)) for p in pointing)
+    gap = math.hypot(max(tx - half, 0.0), max(ty - half, 0.0))
+    if gap >= radius:
+        raise ValueError(f"pointing (Tx, Ty) = ({pointing[0]:g}, {pointing[1]:g}) puts the detector "
+                         f"(±{half:.0f}″) off the solar disk (radius {radius:.0f}″): point within "
+                         f"{half + radius:.0f}″ of the Sun's centre")
 
 
 def _same(a, b):
@@ -328,7 +370,9 @@ class SimulationConfig:
             value = value if name != "pointing" else u.Quantity(value)
             if not isinstance(value, u.Quantity) or not value.unit.is_equivalent(unit):
                 raise u.UnitsError(f"{name} must be a Quantity convertible to {unit}, got {value!r}")
-        n_frames_in(self.duration, self.instrument)  # finite, positive, a whole number of frames
+        if isinstance(self.obstime, (datetime.date, Time)):   # TOML's native date-time, a Time
+            object.__setattr__(self, "obstime", Time(self.obstime).isot)
+        _check_timing(self.duration, self.instrument)
         if self.engine not in ENGINES:
             raise ValueError(f"engine must be one of {ENGINES}, got {self.engine!r}")
         if self.mode not in MODES:
@@ -351,6 +395,9 @@ class SimulationConfig:
             raise ValueError(f"photosphere_shape must be two ints >= 4, got {self.photosphere_shape!r}")
         object.__setattr__(self, "photosphere_shape", tuple(int(n) for n in shape))
         Pointing(self.latitude, self.obstime)  # checks the latitude and the time, once, in one place
+        _check_dates(self.obstime, self.duration)
+        if self.mode == "full-disk":
+            _check_on_disk(self.pointing, self.obstime, self.instrument, self.detector_pixels)
         if self.workers is not None:
             if not _is_int(self.workers) or self.workers < 1:
                 raise ValueError(f"workers must be a positive int or None, got {self.workers!r}")

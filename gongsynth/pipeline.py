@@ -22,7 +22,7 @@ from gongsynth.resources import check_resources
 from gongsynth.sun.atmosphere import Atmosphere
 from gongsynth.version import version as __version__
 
-__all__ = ["SimulationResult", "Sweep", "simulate", "simulate_many", "simulate_each"]
+__all__ = ["SimulationResult", "Sweep", "simulate", "simulate_many", "simulate_each", "check_scene"]
 
 @dataclass
 class SimulationResult:
@@ -256,6 +256,7 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="bl
         raise TypeError(f"pass either config or the run's arguments, not both: {sorted(_given(arguments))}")
     check_resources(config)
     config, stokes = _input_atmosphere(config, stokes)
+    check_scene(config, stokes)
     config, surface_field = _surface_field(config, surface_field)
     config, flat = _detector_map(config, "flat", flat)
     config, dark = _detector_map(config, "dark", dark)
@@ -268,6 +269,36 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="bl
         continuum=state["continuum_map"], truth=state["truth_map"], truth_psf=state["truth_psf_map"],
         raw=state["raw"], expected_counts=state["expected_counts"],
         resolution_map=state["light"].resolution_map(), config=config, timings=timings, chain=chain)
+
+
+def check_scene(config, stokes=None):
+    """
+    Refuse, before any computing, a tiled scene whose tile is smaller than a detector pixel.
+
+    Parameters
+    ----------
+    config : `~gongsynth.config.SimulationConfig`
+    stokes : `~gongsynth.StokesCube` or `~gongsynth.Atmosphere`, optional
+        The input Sun (default: the built-in one of ``config``).
+
+    Raises
+    ------
+    ValueError
+        As `gongsynth.stages.scene.tiled.check_tile_extent`.
+    """
+    from gongsynth.geometry import Pointing
+    from gongsynth.stages.scene.tiled import check_tile_extent
+
+    if config.mode != "tiled":
+        return
+    if isinstance(stokes, Atmosphere):
+        shape, pixel = stokes.shape[1:], stokes.pixel_size
+    elif stokes is not None:
+        shape, pixel = stokes.I.shape[:2], stokes.pixel_size
+    else:
+        shape, pixel = config.photosphere_shape, config.photosphere_pixel_size
+    check_tile_extent(shape, pixel, Pointing(config.latitude, config.obstime), config.resolutions,
+                      config.instrument)
 
 
 def _detector_map(config, name, given):

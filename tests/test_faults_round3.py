@@ -316,3 +316,63 @@ def test_calibrate_refuses_a_truth_map_unless_forced(small_run, tmp_path, capsys
     assert main(["calibrate", str(small_run / product), "--out", str(out)]) == 2
     assert "ground-truth map" in capsys.readouterr().err and not out.exists()
     assert main(["calibrate", str(small_run / "magnetogram.fits"), "--out", str(out)]) == 0
+
+
+# ----------------------------------------------------------------- 7 errors before the computing
+@pytest.fixture
+def nothing_computed(monkeypatch):
+    """Fail the test if a chain of stages is built (the computing starts there)."""
+    calls = []
+    monkeypatch.setattr("gongsynth.pipeline.build_chain", lambda *a, **k: calls.append(a) or 1 / 0)
+    return calls
+
+
+@pytest.mark.parametrize(("flags", "words"), [
+    (["--latitude", "89.5"], "spans only 1.17″ × 134″ on the sky at latitude 89.5"),
+    (["--latitude", "0", "89.5"], "spans only 1.17″"),
+    (["--duration", "0.0125"], "leaves accumulation plane(s) without a frame"),
+    (["--date", "9999-12-31T23:59"], "within the years 0001-9999"),
+    (["--mode", "full-disk", "--pointing", "1e9", "1e9"], "off the solar disk"),
+    (["--mode", "full-disk", "--shape", "64", "--pointing", "1100", "0"], "off the solar disk"),
+])
+@pytest.mark.filterwarnings("ignore:ERFA function:erfa.ErfaWarning")   # year 9999: "dubious year"
+def test_late_errors_are_caught_before_computing(tmp_path, capsys, nothing_computed, flags, words):
+    config = _small_toml(tmp_path, seed=1)
+    assert main(["simulate", "--config", str(config), *flags, "--quiet", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert words in err and "Latitude" not in err
+    assert nothing_computed == [] and not (tmp_path / "o").exists()
+
+
+def test_bad_instrument_timing_in_toml_is_caught_before_computing(tmp_path, capsys, nothing_computed):
+    path = tmp_path / "t.toml"
+    path.write_text('[instrument]\nlcvr_period = "0.01 s"\n')
+    assert main(["simulate", "--config", str(path), "--quiet", "--out", str(tmp_path / "o")]) == 2
+    assert "frames per LCVR state" in capsys.readouterr().err and nothing_computed == []
+
+
+def test_toml_native_datetime_is_accepted():
+    from gongsynth.config import SimulationConfig
+
+    config = SimulationConfig.from_toml("[simulation]\nobstime = 2020-01-01T00:00:00\nseed = 1\n")
+    assert config.obstime == "2020-01-01T00:00:00.000"
+    assert SimulationConfig.from_toml(config.to_toml()) == config      # and it saves
+
+
+# ----------------------------------------------------------------- 9 1-D atmospheres run
+def test_cli_runs_a_1d_model_as_a_uniform_atmosphere(tmp_path, capsys):
+    import sunpy.map
+
+    from .realdata import REAL_DATA
+
+    model = REAL_DATA / "models" / "hsra11.1d"
+    if not model.is_file():
+        pytest.skip(f"1-D model not found at {model}")
+    out = tmp_path / "hsra"
+    assert main(["simulate", "--atmosphere", str(model), "--shape", "16", "--duration", "1", "--seed", "1",
+                 "--quiet", "--out", str(out)]) == 0
+    continuum = sunpy.map.Map(out / "continuum.fits").data
+    truth = sunpy.map.Map(out / "truth.fits").data
+    # A horizontally uniform, field-free atmosphere: a continuum flat to the camera's noise, no field.
+    assert np.isfinite(continuum).all() and np.std(continuum) < 0.01 * np.mean(continuum)
+    assert np.all(truth == 0)

@@ -136,8 +136,8 @@ def calibrate(smap, *, table=None, force=False):
                          f"it again would multiply the correction; calibrate the measured map instead, or "
                          f"force it (calibrate --force)")
     if not force and content.upper().startswith("TRUE B_LOS"):
-        raise ValueError(f"the map is a ground-truth map (CONTENT = {content!r}), not a measurement: calibrate "
-                         f"the magnetogram, or force it (calibrate --force)")
+        raise ValueError(f"the map is a ground-truth map (CONTENT = {content!r}), not a measurement: "
+                         f"calibrate the magnetogram, or force it (calibrate --force)")
     if table is None or not hasattr(table, "colnames"):
         table = read_calibration_table(table)
     measured = gauss_values(smap, "smap")

@@ -168,6 +168,9 @@ class Atmosphere:
         """
         Read a 1-D SIR ``.mod``, Hazel ``.1d`` or RH ``.atmos`` model as a 1 × 1 column.
 
+        The column is horizontally uniform; its spacing is
+        `~gongsynth.sun.atmosphere_files.UNIFORM_PIXEL_KM`, so that it tiles any field.
+
         Parameters
         ----------
         path : str or path-like
