@@ -154,6 +154,8 @@ def _simulation_config(args):
     for name in ("engine", "mode", "seed", "workers", "obstime", "sun", "site", "surface_field"):
         if getattr(args, name) is not None:
             changes[name] = getattr(args, name)
+    if args.surface_field is not None:
+        changes["surface_field_sha256"] = None     # a new file: recorded when read
     if args.pointing is not None:
         changes["pointing"] = args.pointing * u.arcsec
     if args.like is not None:
@@ -166,7 +168,7 @@ def _simulation_config(args):
     if args.shape is not None:
         changes["detector_shape"] = args.shape
     if args.atmosphere is not None:
-        changes["atmosphere_file"] = str(args.atmosphere)
+        changes["atmosphere_file"], changes["atmosphere_sha256"] = str(args.atmosphere), None
     if args.latitude and len(args.latitude) == 1:
         changes["latitude"] = args.latitude[0] * u.deg
     return config.replace(**changes)
@@ -179,9 +181,7 @@ def _run_simulate(args):
 
     config = _simulation_config(args)
     progress = not args.quiet
-    # Read once for all latitudes of a sweep (the config records the path).
-    atmosphere = _read_atmosphere(config.atmosphere_file, "--atmosphere" if args.atmosphere else
-                                  "atmosphere_file") if config.atmosphere_file else None
+    config, atmosphere = _input_files(args, config)
     state = {"written": [], "saving": None}
     try:
         if args.latitude and len(args.latitude) > 1:
@@ -236,15 +236,42 @@ def _run_simulate(args):
     return EXIT_OK
 
 
-def _read_atmosphere(path, name):
-    """The input atmosphere, a bad one named by its argument (exit 2)."""
+def _input_files(args, config):
+    """
+    The input atmosphere (read once for all latitudes of a sweep) and a check of the surface-field map,
+    before any computing; the config records both by absolute path and SHA-256.  A bad one is named
+    by its argument (exit 2).
+    """
+    from gongsynth.analysis.observations import load_observation
+    from gongsynth.config import SURFACE_FIELD_NAMES
+    from gongsynth.pipeline import record_input_file
     from gongsynth.sun.atmosphere import Atmosphere
 
-    try:
-        return Atmosphere.read(path)
-    except (ValueError, TypeError, KeyError) as exc:
-        message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
-        raise ValueError(f"{name} {path}: {message}") from exc
+    atmosphere = None
+    if config.atmosphere_file:
+        name = "--atmosphere" if args.atmosphere else "atmosphere_file"
+        try:
+            config = record_input_file(config, "atmosphere_file", "atmosphere_sha256")
+            atmosphere = Atmosphere.read(config.atmosphere_file)
+        except (OSError, ValueError, TypeError, KeyError) as exc:
+            raise ValueError(f"{name} {config.atmosphere_file}: {_cause(exc)}") from exc
+    if config.surface_field is not None and config.surface_field not in SURFACE_FIELD_NAMES:
+        given = args.surface_field is not None
+        try:
+            config = record_input_file(config, "surface_field", "surface_field_sha256", folder=False)
+            load_observation(config.surface_field, kind="magnetogram")
+        except (OSError, ValueError, TypeError, KeyError) as exc:
+            raise ValueError(f"{'--surface-field' if given else 'surface_field'} "
+                             f"{args.surface_field if given else config.surface_field!r}: {_cause(exc)} "
+                             f"(expected 'synthetic', 'quiet' or a magnetogram or synoptic map FITS "
+                             f"file)") from exc
+    return config, atmosphere
+
+
+def _cause(exc):
+    """What went wrong, for a message that names the argument first."""
+    message = _describe(exc)[0]
+    return message[len("error: "):] if message.startswith("error: ") else message
 
 
 def _adopt_seed(args, configs, folders):

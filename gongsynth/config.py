@@ -69,6 +69,9 @@ _DOCS = {
     "surface_field": "full-disk mode: the Sun's large-scale field: 'synthetic' (the seeded synthetic Sun of "
                      "the date; the default), 'quiet' (the quiet Sun everywhere), a magnetogram or synoptic "
                      "map's FITS path ('<array>': passed in memory)",
+    "atmosphere_sha256": "SHA-256 of that atmosphere (a folder: of its files), checked when the run is "
+                         "repeated",
+    "surface_field_sha256": "SHA-256 of that surface-field map file, checked when the run is repeated",
     "flat_file": "a user-supplied flat: its FITS path, or '<array>' (unset: the synthetic flat)",
     "flat_sha256": "SHA-256 of that flat, checked when the run is repeated",
     "dark_file": "a user-supplied dark: its FITS path, or '<array>' (unset: the synthetic dark)",
@@ -297,6 +300,10 @@ class SimulationConfig:
         A model atmosphere as the input Sun instead of the built-in one: its
         path (read by `gongsynth.Atmosphere.read`), or ``"<array>"`` when it
         was passed to `gongsynth.simulate` in memory.
+    atmosphere_sha256, surface_field_sha256 : str or None
+        The `~gongsynth.files.fingerprint` of the atmosphere file (or folder)
+        and of the surface-field map file (their paths are recorded absolute);
+        a repeat of the run refuses a file that has changed.
     surface_field : str or None
         Full-disk mode: the large-scale radial field the small scales follow:
         ``"synthetic"`` (`gongsynth.sun.surface_field.synthetic_surface_field`
@@ -345,7 +352,9 @@ class SimulationConfig:
     effects: Effects = field(default_factory=Effects)
     photosphere: dict = field(default_factory=dict)
     atmosphere_file: str | None = None
+    atmosphere_sha256: str | None = None
     surface_field: str | None = None
+    surface_field_sha256: str | None = None
     flat_file: str | None = None
     flat_sha256: str | None = None
     dark_file: str | None = None

@@ -22,7 +22,8 @@ from gongsynth.resources import check_resources
 from gongsynth.sun.atmosphere import Atmosphere
 from gongsynth.version import version as __version__
 
-__all__ = ["SimulationResult", "Sweep", "simulate", "simulate_many", "simulate_each", "check_scene"]
+__all__ = ["SimulationResult", "Sweep", "simulate", "simulate_many", "simulate_each", "check_scene",
+           "record_input_file"]
 
 @dataclass
 class SimulationResult:
@@ -337,7 +338,8 @@ def _input_atmosphere(config, stokes):
         if recorded == IN_MEMORY:
             raise ValueError("this configuration's input Sun was an Atmosphere passed in memory "
                              "(atmosphere_file = '<array>'): pass it again as simulate's first argument")
-        return config, Atmosphere.read(recorded)
+        config = record_input_file(config, "atmosphere_file", "atmosphere_sha256")
+        return config, Atmosphere.read(config.atmosphere_file)
     if isinstance(stokes, Atmosphere) and recorded is None:
         return config.replace(atmosphere_file=IN_MEMORY), stokes
     return config, stokes
@@ -357,10 +359,57 @@ def _surface_field(config, given):
                              "(surface_field = '<array>'): pass it again as surface_field=")
         given = recorded
     if isinstance(given, (str, Path)):
-        return config.replace(surface_field=str(given)), sunpy.map.Map(str(given))
+        from gongsynth.analysis.observations import load_observation
+
+        config = record_input_file(config.replace(surface_field=str(given)), "surface_field",
+                                   "surface_field_sha256", folder=False)
+        try:   # the checks every observation gets: kind and unit, WCS, finite data
+            return config, load_observation(config.surface_field, kind="magnetogram")
+        except ValueError as exc:
+            raise ValueError(f"surface_field {given}: {exc}") from exc
     if not isinstance(given, sunpy.map.GenericMap):
         raise TypeError(f"surface_field must be a sunpy Map or a FITS path, got {type(given).__name__}")
     return config.replace(surface_field=IN_MEMORY), given
+
+
+def record_input_file(config, key, sha_key, *, folder=True):
+    """
+    ``config`` with an input file recorded by absolute path and SHA-256; a file that changed is refused.
+
+    Parameters
+    ----------
+    config : `~gongsynth.config.SimulationConfig`
+    key, sha_key : str
+        The fields holding the path and its digest (``"atmosphere_file"``, ``"atmosphere_sha256"``).
+    folder : bool, optional
+        Whether the input may be a folder (a MURaM snapshot).
+
+    Returns
+    -------
+    `~gongsynth.config.SimulationConfig`
+
+    Raises
+    ------
+    FileNotFoundError
+        If the path does not exist.
+    ValueError
+        If the file's SHA-256 differs from the one recorded.
+    """
+    text = getattr(config, key)
+    if "://" in text:
+        raise ValueError(f"{key} {text!r}: a URL; gongsynth reads local files only (download it first)")
+    path = Path(text).absolute()
+    if not text or not path.exists():
+        raise FileNotFoundError(2, f"no such {key} file or folder", text)
+    if path.is_dir() and not folder:
+        raise IsADirectoryError(f"{key} {path} is a folder, not a FITS file")
+    digest = fingerprint(path)
+    recorded = getattr(config, sha_key)
+    if recorded is not None and digest != recorded:
+        raise ValueError(f"{key} {path} has changed since this configuration recorded it (sha256 "
+                         f"{recorded[:12]}..., now {digest[:12]}...): restore it, or delete {sha_key} from "
+                         f"the configuration to run with the new file")
+    return config.replace(**{key: str(path), sha_key: digest})
 
 
 def _given(arguments):

@@ -376,3 +376,61 @@ def test_cli_runs_a_1d_model_as_a_uniform_atmosphere(tmp_path, capsys):
     # A horizontally uniform, field-free atmosphere: a continuum flat to the camera's noise, no field.
     assert np.isfinite(continuum).all() and np.std(continuum) < 0.01 * np.mean(continuum)
     assert np.all(truth == 0)
+
+
+# ----------------------------------------------------------------- 2 --surface-field is checked
+@pytest.mark.parametrize(("relpath", "words"), [
+    ("mdi/mdi.fd_ic.20101015_230100_TAI.data.fits", "is not a magnetogram"),     # an intensity map
+    ("hinode/FGMG4_20110214_030443.7.fits", "is not a magnetogram"),            # Hinode V/I
+    ("gong/bbiqa090905t1854.fits.gz", "is not a magnetogram"),                  # GONG intensity
+    ("gong", "is a folder, not a FITS file"),
+    ("", "no such surface_field file"),
+    ("http://example.com/m.fits", "a URL; gongsynth reads local files only"),
+])
+def test_cli_surface_field_goes_through_the_checked_reader(tmp_path, capsys, nothing_computed, relpath, words):
+    from .realdata import REAL_DATA
+
+    value = relpath if relpath in ("", "http://example.com/m.fits") else str(REAL_DATA / relpath)
+    if value == str(REAL_DATA / relpath) and not (REAL_DATA / relpath).exists():
+        pytest.skip(f"real data not found at {REAL_DATA / relpath}")
+    code = main(["simulate", "--mode", "full-disk", "--shape", "16", "--duration", "1", "--seed", "1",
+                 "--surface-field", value, "--quiet", "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err
+    assert code == 2 and "--surface-field" in err and words in err and "allow_errors" not in err
+    assert nothing_computed == []
+
+
+def test_cli_surface_field_of_a_runs_raw_planes_is_refused(small_run, tmp_path, capsys, nothing_computed):
+    code = main(["simulate", "--mode", "full-disk", "--shape", "16", "--duration", "1", "--seed", "1",
+                 "--surface-field", str(small_run / "raw.fits"), "--quiet", "--out", str(tmp_path / "o")])
+    assert code == 2 and "--surface-field" in capsys.readouterr().err and nothing_computed == []
+
+
+# ----------------------------------------------------------------- 8 reruns from config.toml
+def test_rerun_records_absolute_paths_and_refuses_a_changed_input(tmp_path, capsys, monkeypatch):
+    import shutil
+
+    from gongsynth.config import SimulationConfig
+
+    from .realdata import REAL_DATA
+
+    source = REAL_DATA / "models" / "hsra11.1d"
+    if not source.is_file():
+        pytest.skip(f"1-D model not found at {source}")
+    here = tmp_path / "here"
+    here.mkdir()
+    shutil.copy(source, here / "model.1d")
+    monkeypatch.chdir(here)
+    assert main(["simulate", "--atmosphere", "model.1d", "--shape", "16", "--duration", "1", "--seed", "1",
+                 "--quiet", "--out", "run"]) == 0
+    saved = SimulationConfig.from_toml(here / "run" / "config.toml")
+    assert saved.atmosphere_file == str(here / "model.1d") and len(saved.atmosphere_sha256) == 64
+    # From another folder, the recorded absolute path is found; a changed file is refused before computing.
+    monkeypatch.chdir(tmp_path)
+    (here / "model.1d").write_text((here / "model.1d").read_text().replace("0.6", "0.7", 1))
+    calls = []
+    monkeypatch.setattr("gongsynth.pipeline.build_chain", lambda *a, **k: calls.append(a) or 1 / 0)
+    assert main(["simulate", "--config", str(here / "run" / "config.toml"), "--quiet", "--out", "again"]) == 2
+    err = capsys.readouterr().err
+    assert "atmosphere_file" in err and "has changed since this configuration recorded it" in err
+    assert calls == []

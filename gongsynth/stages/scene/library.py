@@ -45,6 +45,7 @@ from pathlib import Path
 import astropy.units as u
 import numpy as np
 
+from gongsynth.files import fingerprint
 from gongsynth.instrument import resolve_instrument
 from gongsynth.seeding import as_seed_sequence, child_sequence
 from gongsynth.stages.scene.library_layout import library_layout
@@ -399,14 +400,6 @@ def _warn(message):
     warnings.warn(message, CacheWarning, stacklevel=3)
 
 
-def _sha256(path):
-    digest = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 22), b""):
-            digest.update(block)
-    return digest.hexdigest()
-
-
 def _clean_stale(parent):
     """Remove the temporary folders of killed saves (another process's live one is left alone)."""
     import time
@@ -446,7 +439,7 @@ def _save(library, folder):
                  "level_uniform": list(library.level_uniform), "pixel_km": library.pixel_size.to_value(u.km),
                  "n_e": library.n_e, "e_index": list(library.e_index), "v_sign": list(library.v_sign),
                  "mirror_ok": library.mirror_ok, "basis_error": library.basis.error, "meta": library.meta,
-                 "sha256": {p.name: _sha256(p) for p in sorted(tmp.glob("*.npy"))}}
+                 "sha256": {p.name: fingerprint(p) for p in sorted(tmp.glob("*.npy"))}}
         (tmp / "library.json").write_text(json.dumps(small))
         if folder.exists():   # a damaged entry: moved aside, then removed
             old = Path(tempfile.mkdtemp(prefix=f"{folder.name}.tmp-{os.getpid()}-", dir=folder.parent))
@@ -472,7 +465,7 @@ def _verify(folder, small):
                                                                                          _BASIS)}:
         raise ValueError("no checksums")
     for name, digest in sums.items():
-        if _sha256(folder / name) != digest:
+        if fingerprint(folder / name) != digest:
             raise ValueError(f"{name} does not match its checksum")
     _VERIFIED.add(folder)
 
