@@ -21,7 +21,9 @@ run cannot be done on this machine (more memory than is available),
 import argparse
 import dataclasses
 import math
+import signal
 import sys
+import threading
 from pathlib import Path
 
 import astropy.units as u
@@ -35,6 +37,7 @@ from gongsynth.version import version as __version__
 __all__ = ["main", "build_parser"]
 
 EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_EXISTS, EXIT_CANNOT_RUN, EXIT_INTERRUPTED = 0, 1, 2, 3, 4, 130
+EXIT_TERMINATED = 143
 
 
 def _number(kind, *, minimum=None, positive=False):
@@ -54,6 +57,13 @@ def _number(kind, *, minimum=None, positive=False):
         return value
     convert.__name__ = kind.__name__
     return convert
+
+
+def _out_path(text):
+    """An argparse type: a non-empty path (an empty one would write into the current folder)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("is empty; name the output folder (e.g. --out run1)")
+    return Path(text)
 
 
 def build_parser():
@@ -112,7 +122,7 @@ def build_parser():
                      help="a model atmosphere as the input Sun, synthesised by LTE radiative transfer: "
                           "a MURaM snapshot folder, a gongsynth or ART HDF5 file (.h5), or a 1-D model "
                           "(SIR .mod, Hazel .1d, RH .atmos)")
-    sim.add_argument("--out", type=Path, required=True, help="output directory")
+    sim.add_argument("--out", type=_out_path, required=True, help="output directory")
     sim.add_argument("--overwrite", action="store_true", help="replace existing output files")
     sim.add_argument("--quiet", action="store_true", help="no progress bars or messages")
     effects = sim.add_argument_group(
@@ -159,8 +169,13 @@ def _simulation_config(args):
     if args.pointing is not None:
         changes["pointing"] = args.pointing * u.arcsec
     if args.like is not None:
-        taken, changes["instrument"] = like_gong(args.like, settings=changes, instrument=config.instrument,
-                                                 mode=changes.get("mode", config.mode))
+        try:
+            taken, changes["instrument"] = like_gong(args.like, settings=changes,
+                                                     instrument=config.instrument,
+                                                     mode=changes.get("mode", config.mode))
+        except (OSError, ValueError, TypeError, KeyError, IndexError) as exc:
+            raise ValueError(f"--like {args.like}: {_cause(exc)} (expected a GONG full-disk FITS "
+                             f"file)") from exc
         changes.update(taken)
     off = {e.name: False for e in dataclasses.fields(Effects) if getattr(args, f"no_{e.name}")}
     if off:
@@ -180,6 +195,10 @@ def _run_simulate(args):
     from gongsynth.resources import check_disk_space, check_resources
 
     config = _simulation_config(args)
+    if args.latitude and config.mode == "full-disk":
+        raise ValueError(f"--latitude {' '.join(map(str, args.latitude))}: a full-disk run sees the whole "
+                         f"disk; --latitude places a tiled field (use --pointing TX TY to move the full-disk "
+                         f"detector)")
     progress = not args.quiet
     config, atmosphere = _input_files(args, config)
     state = {"written": [], "saving": None}
@@ -355,16 +374,25 @@ def _run_calibrate(args):
     from gongsynth.analysis.observations import load_observation
     from gongsynth.files import atomic_path, check_writable
 
+    suffix = "".join(args.out.suffixes[-2:]).lower()
+    if not any(suffix.endswith(s) for s in _FITS_SUFFIXES):
+        raise ValueError(f"--out {args.out}: the calibrated map is a FITS file; end its name in one of "
+                         f"{', '.join(_FITS_SUFFIXES)} (.gz: compressed)")
     check_writable([args.out], args.overwrite)
     smap = load_observation(args.magnetogram)
     calibrated = calibrate(smap, table=args.table, force=args.force)
     with atomic_path(args.out, overwrite=args.overwrite) as tmp:
-        calibrated.save(tmp, overwrite=True)  # the temporary file exists already
+        # FITS whatever the temporary name (astropy compresses a name ending in .gz); it exists already.
+        calibrated.save(tmp, filetype="fits", overwrite=True)
     both = np.isfinite(smap.data) & np.isfinite(calibrated.data)
     ratio = np.abs(calibrated.data[both]).sum() / max(np.abs(smap.data[both]).sum(), 1e-300)
     _say(args, f"wrote {args.out} (table {calibrated.meta['caltable']})")
     print(f"unsigned flux, calibrated / measured: {ratio:.4f} over {both.sum()} pixels")
     return EXIT_OK
+
+
+#: The names the calibrated map may take.
+_FITS_SUFFIXES = (".fits", ".fts", ".fit", ".fits.gz", ".fts.gz", ".fit.gz")
 
 
 def _say(args, message):
@@ -396,6 +424,7 @@ def main(argv=None):
     """
     parser = build_parser()
     args = parser.parse_args(argv)
+    previous = _terminate_like_ctrl_c()
     try:
         if args.command == "config":
             from gongsynth.config import SimulationConfig
@@ -410,6 +439,24 @@ def main(argv=None):
     except (OSError, ValueError, TypeError, KeyError, u.UnitsError, CannotRunHereError, MemoryError,
             KeyboardInterrupt) as exc:
         return _fail(*_describe(exc))
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (``kill``, a batch system's time limit): stopped like Ctrl-C, output sets left whole."""
+
+
+def _terminate_like_ctrl_c():
+    """SIGTERM raises `Terminated` (the clean-up of Ctrl-C); the handler it replaced, or None."""
+    if threading.current_thread() is not threading.main_thread():
+        return None
+
+    def handler(signum, frame):
+        raise Terminated
+
+    return signal.signal(signal.SIGTERM, handler)
 
 
 def _describe(exc):
@@ -428,6 +475,8 @@ def _describe(exc):
         what = str(exc) or ("out of memory: use a smaller --shape, a shorter --duration or fewer --workers, "
                             "or a machine with more memory")
         return f"cannot run here: {what}", EXIT_CANNOT_RUN
+    if isinstance(exc, Terminated):
+        return _with_notes("terminated (SIGTERM)", exc), EXIT_TERMINATED
     if isinstance(exc, KeyboardInterrupt):
         return _with_notes("interrupted", exc), EXIT_INTERRUPTED
     if isinstance(exc, OSError):  # a full disk, an I/O error: the output sets are atomic

@@ -600,9 +600,17 @@ class SimulationConfig:
             raise KeyError(f"unknown key(s) {bad} in [simulation]; valid keys are {sorted(known)}")
         for name, (unit, _) in _QUANTITIES.items():
             if name in sim:
+                if isinstance(sim[name], list) and name != "pointing":
+                    raise ValueError(f"[simulation] {name} is one value, e.g. {name} = \"1 {unit}\", got the "
+                                     f"list {sim[name]!r}" + ("; a sweep of latitudes: gongsynth simulate "
+                                                               "--latitude 0 30 60, or simulate_many"
+                                                               if name == "latitude" else ""))
                 sim[name] = _quantity(name, sim[name], unit)
-        for name in ("resolutions", "photosphere_shape"):
+        for name, example in (("resolutions", "[1, 2, 4, 8]"), ("photosphere_shape", "[256, 256]")):
             if name in sim:
+                if not isinstance(sim[name], (list, tuple)):
+                    raise TypeError(f"[simulation] {name} is a list, e.g. {name} = {example}, "
+                                    f"got {sim[name]!r}")
                 sim[name] = tuple(sim[name])
         instrument = GONGInstrument.from_dict(table.get("instrument", {}))
         if sim.get("like") is not None:

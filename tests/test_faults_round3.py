@@ -434,3 +434,78 @@ def test_rerun_records_absolute_paths_and_refuses_a_changed_input(tmp_path, caps
     err = capsys.readouterr().err
     assert "atmosphere_file" in err and "has changed since this configuration recorded it" in err
     assert calls == []
+
+
+# ----------------------------------------------------------------- 10 messages and exit codes
+def test_cli_bad_like_file_is_named_with_exit_2(tmp_path, capsys):
+    bad = tmp_path / "bad.fits"
+    bad.write_text("not FITS")
+    for like in (bad, tmp_path):
+        assert main(["simulate", "--like", str(like), "--out", str(tmp_path / "o")]) == 2
+        assert f"--like {like}" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("name", ["x", "x.png"])
+def test_calibrate_out_suffix_is_checked_first(small_run, tmp_path, capsys, name):
+    assert main(["calibrate", str(small_run / "magnetogram.fits"), "--out", str(tmp_path / name)]) == 2
+    err = capsys.readouterr().err
+    assert ".fits, .fts" in err and "part" not in err and not (tmp_path / name).exists()
+
+
+def test_calibrate_writes_fits_gz(small_run, tmp_path, capsys):
+    from astropy.io import fits
+
+    out = tmp_path / "cal.fits.gz"
+    assert main(["calibrate", str(small_run / "magnetogram.fits"), "--out", str(out)]) == 0
+    assert out.read_bytes()[:2] == b"\x1f\x8b"          # gzip
+    with fits.open(out) as hdus:
+        assert any(h.data is not None and h.data.ndim == 2 for h in hdus)
+
+
+def test_out_of_memory_message_says_what_to_do(tmp_path, capsys, monkeypatch):
+    def no_memory(*args, **kwargs):
+        raise MemoryError
+
+    monkeypatch.setattr("gongsynth.pipeline.build_chain", no_memory)
+    config = _small_toml(tmp_path, seed=1)
+    assert main(["simulate", "--config", str(config), "--quiet", "--out", str(tmp_path / "o")]) == 4
+    assert "cannot run here: out of memory: use a smaller --shape" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(("text", "words"), [
+    ("photosphere_shape = 256", "photosphere_shape is a list, e.g. photosphere_shape = [256, 256], got 256"),
+    ('latitude = ["0 deg", "30 deg"]', "latitude is one value"),
+])
+def test_toml_shape_and_latitude_list_messages(tmp_path, capsys, text, words):
+    path = tmp_path / "c.toml"
+    path.write_text(f"[simulation]\n{text}\n")
+    assert main(["simulate", "--config", str(path), "--out", str(tmp_path / "o")]) == 2
+    assert words in capsys.readouterr().err
+
+
+# ----------------------------------------------------------------- 11 silent results
+def test_latitude_in_full_disk_mode_is_refused(tmp_path, capsys, nothing_computed):
+    assert main(["simulate", "--mode", "full-disk", "--latitude", "30", "--out", str(tmp_path / "o")]) == 2
+    assert "--latitude 30.0: a full-disk run" in capsys.readouterr().err and nothing_computed == []
+
+
+def test_empty_out_is_refused(capsys):
+    with pytest.raises(SystemExit) as info:
+        main(["simulate", "--out", ""])
+    assert info.value.code == 2 and "--out: is empty" in capsys.readouterr().err
+
+
+def test_sigterm_stops_like_ctrl_c(tmp_path, capsys, monkeypatch):
+    import os
+    import signal
+
+    def terminated(*args, **kwargs):
+        os.kill(os.getpid(), signal.SIGTERM)
+
+    monkeypatch.setattr("gongsynth.pipeline.build_chain", terminated)
+    before = signal.getsignal(signal.SIGTERM)
+    config = _small_toml(tmp_path, seed=1)
+    assert main(["simulate", "--config", str(config), "--quiet", "--out", str(tmp_path / "o")]) == 143
+    err = capsys.readouterr().err
+    assert "terminated (SIGTERM)" in err and "nothing was written" in err
+    assert signal.getsignal(signal.SIGTERM) is before and not (tmp_path / "o").exists()
