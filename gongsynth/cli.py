@@ -13,10 +13,11 @@ The ``gongsynth`` command line.
     gongsynth calibrate IN.fits --out OUT.fits [--table TABLE.ecsv] [--overwrite]
     gongsynth config --print-defaults
 
-Exit codes: 0 success, 1 runtime failure, 2 bad usage or bad input (the
-message names the argument), 3 refusing to overwrite existing output, 4 the
-run cannot be done on this machine (more memory than is available),
-130 interrupted.
+Exit codes (`EXIT_CODES`; ``gongsynth --help`` lists them with what to do):
+0 success, 1 runtime failure (for a sweep: some run failed, the others are
+saved), 2 bad usage or bad input (the message names the argument), 3 refusing
+to overwrite existing output, 4 the run cannot be done on this machine (more
+memory than is available), 130 interrupted, 143 terminated (SIGTERM).
 """
 import argparse
 import dataclasses
@@ -34,10 +35,23 @@ from gongsynth.resources import CannotRunHereError
 from gongsynth.suns import SUNS
 from gongsynth.version import version as __version__
 
-__all__ = ["main", "build_parser"]
+__all__ = ["main", "build_parser", "EXIT_CODES"]
 
 EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_EXISTS, EXIT_CANNOT_RUN, EXIT_INTERRUPTED = 0, 1, 2, 3, 4, 130
 EXIT_TERMINATED = 143
+#: Each exit code: what it means, and what to do.
+EXIT_CODES = {
+    EXIT_OK: ("success", ""),
+    EXIT_FAILURE: ("failure while running (an I/O error such as a full disk; a failed run of a sweep, "
+                   "the others saved; or a bug)", "fix the disk and run the same command again (a sweep "
+                                                  "computes only the missing runs); report a bug"),
+    EXIT_USAGE: ("bad input: the message names the argument or key", "change it as the message says"),
+    EXIT_EXISTS: ("the output exists", "another --out, or --overwrite"),
+    EXIT_CANNOT_RUN: ("cannot run here: more memory than this machine has",
+                      "a smaller --shape, a shorter --duration, fewer --workers"),
+    EXIT_INTERRUPTED: ("interrupted (Ctrl-C)", "run it again: output sets are complete or absent"),
+    EXIT_TERMINATED: ("terminated (SIGTERM)", "as for 130"),
+}
 
 
 def _number(kind, *, minimum=None, positive=False):
@@ -81,7 +95,11 @@ def build_parser():
     """
     parser = argparse.ArgumentParser(
         prog="gongsynth",
-        description="Simulate what GONG would have measured, end to end.")
+        description="Simulate what GONG would have measured, end to end.",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog="exit codes (the documentation's troubleshooting page says more):\n" + "\n".join(
+            f"  {code:<4d}{meaning}" + (f"\n        -> {todo}" if todo else "")
+            for code, (meaning, todo) in EXIT_CODES.items()))
     parser.add_argument("--version", action="version", version=f"gongsynth {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
 

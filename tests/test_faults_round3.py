@@ -509,3 +509,23 @@ def test_sigterm_stops_like_ctrl_c(tmp_path, capsys, monkeypatch):
     err = capsys.readouterr().err
     assert "terminated (SIGTERM)" in err and "nothing was written" in err
     assert signal.getsignal(signal.SIGTERM) is before and not (tmp_path / "o").exists()
+
+
+# ----------------------------------------------------------------- the exit codes, documented
+def test_exit_codes_are_listed_in_help_readme_and_troubleshooting(capsys):
+    from pathlib import Path
+
+    from gongsynth import cli
+
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    help_text = capsys.readouterr().out
+    root = Path(cli.__file__).resolve().parents[1]
+    readme = (root / "README.md").read_text()
+    page = (root / "docs" / "guide" / "troubleshooting.rst").read_text()
+    codes = {v for k, v in vars(cli).items() if k.startswith("EXIT_") and isinstance(v, int)}
+    assert codes == set(cli.EXIT_CODES)
+    for code in codes - {0}:
+        assert f"  {code:<4d}" in help_text
+        assert f" {code} " in " ".join(readme.split("Exit codes:")[1].split("## ")[0].split())
+        assert f"\n{code:<4d}  " in page
