@@ -84,7 +84,8 @@ def _kernel_inputs(ncol, velocity_cm_s, field_g):
     zero = np.zeros(temp.shape)
     out = [np.empty((ncol, lam.size), dtype=np.float32) for _ in range(4)]
     taus = [np.empty(temp.shape, dtype=np.float32) for _ in range(2)]
-    return (lam, const[0], const[10], lam.size // 2, ds, *opac, full, bpar, 0.5 * bpar, zero, *out, *taus), out
+    args = (lam, const[0], const[10], lam.size // 2, ds, *opac, full, bpar, 0.5 * bpar, zero, *out, *taus)
+    return args, out
 
 
 def test_rt_kernel_stays_in_bounds_whatever_the_input():
@@ -113,7 +114,8 @@ def test_fast_solver_matches_reference_up_to_the_velocity_limit():
 
 
 # ----------------------------------------------------------------- 3, 4 the library cache
-TINY_LIBRARY = dict(shape=(16, 16), pixel_size=6 * u.Mm, seeds_per_level=(1, 1, 1, 1), theta=(0, 40, 80), seed=3)
+TINY_LIBRARY = dict(shape=(16, 16), pixel_size=6 * u.Mm, seeds_per_level=(1, 1, 1, 1), theta=(0, 40, 80),
+                    seed=3)
 
 
 @pytest.fixture(scope="module")
@@ -263,7 +265,8 @@ def _counting_simulate(monkeypatch, fail=None, exc=None):
 
 
 @pytest.mark.parametrize(("exc", "code", "words"), [
-    (RuntimeError("the camera broke"), 1, "1 run(s) of the sweep failed (latitude 30.0 deg: error: RuntimeError"),
+    (RuntimeError("the camera broke"), 1,
+     "1 run(s) of the sweep failed (latitude 30.0 deg: error: RuntimeError"),
     (KeyboardInterrupt(), 130, "interrupted"),
 ])
 def test_a_sweep_keeps_each_finished_run_and_a_rerun_completes_it(tmp_path, monkeypatch, capsys, exc, code,
@@ -387,7 +390,8 @@ def test_cli_runs_a_1d_model_as_a_uniform_atmosphere(tmp_path, capsys):
     ("", "no such surface_field file"),
     ("http://example.com/m.fits", "a URL; gongsynth reads local files only"),
 ])
-def test_cli_surface_field_goes_through_the_checked_reader(tmp_path, capsys, nothing_computed, relpath, words):
+def test_cli_surface_field_goes_through_the_checked_reader(tmp_path, capsys, nothing_computed, relpath,
+                                                          words):
     from .realdata import REAL_DATA
 
     value = relpath if relpath in ("", "http://example.com/m.fits") else str(REAL_DATA / relpath)
