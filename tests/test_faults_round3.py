@@ -522,3 +522,16 @@ def test_exit_codes_are_listed_in_help_readme_and_troubleshooting(capsys):
         assert f"  {code:<4d}" in help_text
         assert f" {code} " in " ".join(readme.split("Exit codes:")[1].split("## ")[0].split())
         assert f"\n{code:<4d}  " in page
+
+
+def test_a_scene_without_light_is_blanked_not_a_noise_magnetogram():
+    """Finding 11: a prefilter 30 nm from the line lets 0.1 e- per frame through: ±2 kG of noise before."""
+    from gongsynth.config import SimulationConfig
+    from gongsynth.pipeline import simulate
+
+    base = SimulationConfig(seed=1, sun="milne-eddington", duration=1 * u.min, detector_shape=16,
+                            resolutions=(1,), photosphere_shape=(64, 64), photosphere_pixel_size=1536 * u.km)
+    dark = base.instrument.replace(prefilter_center=base.instrument.prefilter_center + 30 * u.nm)
+    result = simulate(config=base.replace(instrument=dark), progress=False)
+    assert float(result.expected_counts.sum(axis=0).max().value) < 1     # electrons per frame
+    assert np.isnan(result.magnetogram.data).all() and np.isnan(result.doppler.data).all()
