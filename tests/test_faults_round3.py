@@ -524,6 +524,7 @@ def test_exit_codes_are_listed_in_help_readme_and_troubleshooting(capsys):
         assert f"\n{code:<4d}  " in page
 
 
+# ----------------------------------------------------------------- 11 (continued) a scene without light
 def test_a_scene_without_light_is_blanked_not_a_noise_magnetogram():
     """Finding 11: a prefilter 30 nm from the line lets 0.1 e- per frame through: ±2 kG of noise before."""
     from gongsynth.config import SimulationConfig
