@@ -393,7 +393,11 @@ def unmeasured(expected_counts, config):
       they measure the sky's scattered light, not a line at that place: a
       halo of several hundred G of noise out to 1.05 R☉ otherwise;
     - any run: pixels whose light is below `SKY_FRACTION` of the brightest
-      pixel's, too faint for a meaningful phase.
+      pixel's, too faint for a meaningful phase;
+    - any run: pixels whose expected photo-electrons over the whole
+      observation are below their own noise (photon and read noise): no
+      light reaches them (a prefilter far from the line, say), and the phase
+      would be noise, a magnetogram of ±2 kG otherwise.
 
     A tiled field is a flat tile placed at one latitude (the paper's
     convention), so its pixels are not tested against the limb.
@@ -409,8 +413,14 @@ def unmeasured(expected_counts, config):
     `numpy.ndarray` of bool
         (ny, nx), True where the products are blanked.
     """
+    from gongsynth.stages.camera.schedule import n_frames_in
+
     light = expected_counts.sum(axis=0).value
-    faint = light < SKY_FRACTION * light.max()
+    inst = config.instrument
+    frames = n_frames_in(config.duration, inst)
+    signal = light / expected_counts.shape[0] * frames          # each frame goes to one of the planes
+    read = (inst.read_noise * inst.gain).to_value(u.electron) if config.effects.read_noise else 0.0
+    faint = (light < SKY_FRACTION * light.max()) | (signal <= np.sqrt(signal + frames * read**2))
     if config.mode != "full-disk":
         return faint
     off_disk = ~disk_geometry(light.shape, config.instrument.plate_scale, obstime=config.obstime,

@@ -13,15 +13,18 @@ The ``gongsynth`` command line.
     gongsynth calibrate IN.fits --out OUT.fits [--table TABLE.ecsv] [--overwrite] [--open-flux]
     gongsynth config --print-defaults
 
-Exit codes: 0 success, 1 runtime failure, 2 bad usage or bad input (the
-message names the argument), 3 refusing to overwrite existing output, 4 the
-run cannot be done on this machine (more memory than is available),
-130 interrupted.
+Exit codes (`EXIT_CODES`; ``gongsynth --help`` lists them with what to do):
+0 success, 1 runtime failure (for a sweep: some run failed, the others are
+saved), 2 bad usage or bad input (the message names the argument), 3 refusing
+to overwrite existing output, 4 the run cannot be done on this machine (more
+memory than is available), 130 interrupted, 143 terminated (SIGTERM).
 """
 import argparse
 import dataclasses
 import math
+import signal
 import sys
+import threading
 from pathlib import Path
 
 import astropy.units as u
@@ -32,9 +35,23 @@ from gongsynth.resources import CannotRunHereError
 from gongsynth.suns import SUNS
 from gongsynth.version import version as __version__
 
-__all__ = ["main", "build_parser"]
+__all__ = ["main", "build_parser", "EXIT_CODES"]
 
 EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_EXISTS, EXIT_CANNOT_RUN, EXIT_INTERRUPTED = 0, 1, 2, 3, 4, 130
+EXIT_TERMINATED = 143
+#: Each exit code: what it means, and what to do.
+EXIT_CODES = {
+    EXIT_OK: ("success", ""),
+    EXIT_FAILURE: ("failure while running (an I/O error such as a full disk; a failed run of a sweep, "
+                   "the others saved; or a bug)", "fix the disk and run the same command again (a sweep "
+                                                  "computes only the missing runs); report a bug"),
+    EXIT_USAGE: ("bad input: the message names the argument or key", "change it as the message says"),
+    EXIT_EXISTS: ("the output exists", "another --out, or --overwrite"),
+    EXIT_CANNOT_RUN: ("cannot run here: more memory than this machine has",
+                      "a smaller --shape, a shorter --duration, fewer --workers"),
+    EXIT_INTERRUPTED: ("interrupted (Ctrl-C)", "run it again: output sets are complete or absent"),
+    EXIT_TERMINATED: ("terminated (SIGTERM)", "as for 130"),
+}
 
 
 def _number(kind, *, minimum=None, positive=False):
@@ -56,6 +73,13 @@ def _number(kind, *, minimum=None, positive=False):
     return convert
 
 
+def _out_path(text):
+    """An argparse type: a non-empty path (an empty one would write into the current folder)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("is empty; name the output folder (e.g. --out run1)")
+    return Path(text)
+
+
 def build_parser():
     """
     The argument parser of the ``gongsynth`` command.
@@ -71,7 +95,11 @@ def build_parser():
     """
     parser = argparse.ArgumentParser(
         prog="gongsynth",
-        description="Simulate what GONG would have measured, end to end.")
+        description="Simulate what GONG would have measured, end to end.",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog="exit codes (the documentation's troubleshooting page says more):\n" + "\n".join(
+            f"  {code:<4d}{meaning}" + (f"\n        -> {todo}" if todo else "")
+            for code, (meaning, todo) in EXIT_CODES.items()))
     parser.add_argument("--version", action="version", version=f"gongsynth {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
 
@@ -112,7 +140,7 @@ def build_parser():
                      help="a model atmosphere as the input Sun, synthesised by LTE radiative transfer: "
                           "a MURaM snapshot folder, a gongsynth or ART HDF5 file (.h5), or a 1-D model "
                           "(SIR .mod, Hazel .1d, RH .atmos)")
-    sim.add_argument("--out", type=Path, required=True, help="output directory")
+    sim.add_argument("--out", type=_out_path, required=True, help="output directory")
     sim.add_argument("--overwrite", action="store_true", help="replace existing output files")
     sim.add_argument("--quiet", action="store_true", help="no progress bars or messages")
     effects = sim.add_argument_group(
@@ -138,6 +166,8 @@ def build_parser():
                      help="synoptic maps: also the PFSS open flux (source surface 2.5 R_sun) before and "
                           "after calibration, printed and written as OPENFLX0 / OPENFLX1 (Mx) in the "
                           "output's header (needs gongsynth[pfss])")
+    cal.add_argument("--force", action="store_true",
+                     help="calibrate even a map calibrated already (the correction compounds) or a truth map")
 
     cfg = sub.add_parser("config", help="print the default configuration as TOML")
     cfg.add_argument("--print-defaults", action="store_true", required=True,
@@ -156,11 +186,18 @@ def _simulation_config(args):
     for name in ("engine", "mode", "seed", "workers", "obstime", "sun", "site", "surface_field"):
         if getattr(args, name) is not None:
             changes[name] = getattr(args, name)
+    if args.surface_field is not None:
+        changes["surface_field_sha256"] = None     # a new file: recorded when read
     if args.pointing is not None:
         changes["pointing"] = args.pointing * u.arcsec
     if args.like is not None:
-        taken, changes["instrument"] = like_gong(args.like, settings=changes, instrument=config.instrument,
-                                                 mode=changes.get("mode", config.mode))
+        try:
+            taken, changes["instrument"] = like_gong(args.like, settings=changes,
+                                                     instrument=config.instrument,
+                                                     mode=changes.get("mode", config.mode))
+        except (OSError, ValueError, TypeError, KeyError, IndexError) as exc:
+            raise ValueError(f"--like {args.like}: {_cause(exc)} (expected a GONG full-disk FITS "
+                             f"file)") from exc
         changes.update(taken)
     off = {e.name: False for e in dataclasses.fields(Effects) if getattr(args, f"no_{e.name}")}
     if off:
@@ -168,22 +205,24 @@ def _simulation_config(args):
     if args.shape is not None:
         changes["detector_shape"] = args.shape
     if args.atmosphere is not None:
-        changes["atmosphere_file"] = str(args.atmosphere)
+        changes["atmosphere_file"], changes["atmosphere_sha256"] = str(args.atmosphere), None
     if args.latitude and len(args.latitude) == 1:
         changes["latitude"] = args.latitude[0] * u.deg
     return config.replace(**changes)
 
 
 def _run_simulate(args):
-    from gongsynth.pipeline import simulate, simulate_many
+    from gongsynth.pipeline import check_scene, simulate, simulate_each
     from gongsynth.products.output import check_output_folder
     from gongsynth.resources import check_disk_space, check_resources
-    from gongsynth.sun.atmosphere import Atmosphere
 
     config = _simulation_config(args)
+    if args.latitude and config.mode == "full-disk":
+        raise ValueError(f"--latitude {' '.join(map(str, args.latitude))}: a full-disk run sees the whole "
+                         f"disk; --latitude places a tiled field (use --pointing TX TY to move the full-disk "
+                         f"detector)")
     progress = not args.quiet
-    # Read once for all latitudes of a sweep (the config records the path).
-    atmosphere = Atmosphere.read(config.atmosphere_file) if config.atmosphere_file else None
+    config, atmosphere = _input_files(args, config)
     state = {"written": [], "saving": None}
     try:
         if args.latitude and len(args.latitude) > 1:
@@ -194,24 +233,35 @@ def _run_simulate(args):
                                  f"would share an output folder; give distinct latitudes")
             # Refuse before hours of computing, not after.
             configs = [config.replace(latitude=lat) for lat in latitudes]
-            for cfg in configs:
-                check_resources(cfg)
             check_output_folder(args.out, overwrite=True, name="--out")
-            for folder in folders:
+            configs = _adopt_seed(args, configs, folders)
+            todo = []
+            for cfg, folder in zip(configs, folders):
+                if not args.overwrite and _holds_run(folder, cfg):   # a rerun completes an interrupted sweep
+                    _say(args, f"latitude {cfg.latitude:.1f}: {folder} is complete already (kept)")
+                    continue
+                check_resources(cfg)
+                check_scene(cfg, atmosphere)
                 check_output_folder(folder, overwrite=args.overwrite, name="--out")
-            check_disk_space(configs, args.out)
-            if atmosphere is None:
-                results = simulate_many(latitudes=latitudes, config=config, workers=args.workers,
-                                        progress=progress)
-            else:  # each latitude synthesises the atmosphere along its own rays
-                results = (simulate(atmosphere, config=cfg, progress=progress) for cfg in configs)
-            for result, folder in zip(results, folders):
+                todo.append((cfg, folder))
+            check_disk_space([cfg for cfg, _ in todo], args.out)
+            failed = []
+            runs = simulate_each([cfg for cfg, _ in todo], stokes=atmosphere, workers=args.workers,
+                                 progress=progress)
+            for index, result in runs:   # each set saved as soon as its run is done
+                cfg, folder = todo[index]
+                if isinstance(result, BaseException):
+                    failed.append((cfg, result))
+                    continue
                 state["saving"] = folder
                 result.save(folder, overwrite=args.overwrite)
                 state["written"].append(folder)
                 _say(args, f"latitude {result.config.latitude:.1f}: wrote {folder}")
+            if failed:
+                return _sweep_failures(failed, state)
         else:
             check_resources(config)
+            check_scene(config, atmosphere)
             check_output_folder(args.out, overwrite=args.overwrite, name="--out")
             check_disk_space([config], args.out)
             result = simulate(atmosphere, config=config, progress=progress)
@@ -225,6 +275,92 @@ def _run_simulate(args):
         exc.add_note(_what_was_written(state))
         raise
     return EXIT_OK
+
+
+def _input_files(args, config):
+    """
+    The input atmosphere (read once for all latitudes of a sweep) and a check of the surface-field map,
+    before any computing; the config records both by absolute path and SHA-256.  A bad one is named
+    by its argument (exit 2).
+    """
+    from gongsynth.analysis.observations import load_observation
+    from gongsynth.config import SURFACE_FIELD_NAMES
+    from gongsynth.pipeline import record_input_file
+    from gongsynth.sun.atmosphere import Atmosphere
+
+    atmosphere = None
+    if config.atmosphere_file:
+        name = "--atmosphere" if args.atmosphere else "atmosphere_file"
+        try:
+            config = record_input_file(config, "atmosphere_file", "atmosphere_sha256")
+            atmosphere = Atmosphere.read(config.atmosphere_file)
+        except (OSError, ValueError, TypeError, KeyError) as exc:
+            raise ValueError(f"{name} {config.atmosphere_file}: {_cause(exc)}") from exc
+    if config.surface_field is not None and config.surface_field not in SURFACE_FIELD_NAMES:
+        given = args.surface_field is not None
+        try:
+            config = record_input_file(config, "surface_field", "surface_field_sha256", folder=False)
+            load_observation(config.surface_field, kind="magnetogram")
+        except (OSError, ValueError, TypeError, KeyError) as exc:
+            raise ValueError(f"{'--surface-field' if given else 'surface_field'} "
+                             f"{args.surface_field if given else config.surface_field!r}: {_cause(exc)} "
+                             f"(expected 'synthetic', 'quiet' or a magnetogram or synoptic map FITS "
+                             f"file)") from exc
+    return config, atmosphere
+
+
+def _cause(exc):
+    """What went wrong, for a message that names the argument first."""
+    message = _describe(exc)[0]
+    return message[len("error: "):] if message.startswith("error: ") else message
+
+
+def _adopt_seed(args, configs, folders):
+    """
+    Without a seed given, a rerun of a sweep takes the seed of its finished runs (every run of a
+    sweep shares one), so that it completes the same sweep.
+    """
+    import tomllib
+
+    if args.seed is not None or (args.config is not None and "seed" in tomllib.loads(
+            Path(args.config).read_text()).get("simulation", {})):
+        return configs
+    for cfg, folder in zip(configs, folders):
+        saved = _saved_config(folder)
+        if saved is not None and saved == cfg.replace(seed=saved.seed):
+            return [c.replace(seed=saved.seed) for c in configs]
+    return configs
+
+
+def _saved_config(folder):
+    """The configuration of the complete set in ``folder`` (None if there is none)."""
+    from gongsynth.config import SimulationConfig
+    from gongsynth.products.output import CONFIG_FILE, clean_leftovers
+
+    if not (folder / CONFIG_FILE).is_file():
+        return None
+    clean_leftovers(folder)       # an interrupted save is finished first (the sets are atomic)
+    try:
+        return SimulationConfig.from_toml(folder / CONFIG_FILE)
+    except (OSError, ValueError, TypeError, KeyError, u.UnitsError):
+        return None
+
+
+def _holds_run(folder, config):
+    """Whether ``folder`` holds the complete set of this very run."""
+    from gongsynth.products.output import planned_files
+
+    saved = _saved_config(folder)
+    return saved == config and all(p.is_file() for p in planned_files(folder, quicklook=False, truth=False))
+
+
+def _sweep_failures(failed, state):
+    """Report the runs of a sweep that failed (the others are saved) and return the exit code."""
+    lines = [f"latitude {cfg.latitude:.1f}: {_describe(exc)[0]}" for cfg, exc in failed]
+    done = ", ".join(str(f) for f in state["written"]) or "none"
+    _fail(f"{len(failed)} run(s) of the sweep failed ({'; '.join(lines)}); complete sets written: {done}; "
+          f"run the same command again to compute only the missing ones", 0)
+    return max(_describe(exc)[1] for _, exc in failed)
 
 
 def _what_was_written(state):
@@ -260,18 +396,27 @@ def _run_calibrate(args):
     from gongsynth.analysis.observations import load_observation
     from gongsynth.files import atomic_path, check_writable
 
+    suffix = "".join(args.out.suffixes[-2:]).lower()
+    if not any(suffix.endswith(s) for s in _FITS_SUFFIXES):
+        raise ValueError(f"--out {args.out}: the calibrated map is a FITS file; end its name in one of "
+                         f"{', '.join(_FITS_SUFFIXES)} (.gz: compressed)")
     check_writable([args.out], args.overwrite)
     smap = load_observation(args.magnetogram)
-    calibrated = calibrate(smap, table=args.table)
+    calibrated = calibrate(smap, table=args.table, force=args.force)
     if args.open_flux:
         _record_open_flux(smap, calibrated)
     with atomic_path(args.out, overwrite=args.overwrite) as tmp:
-        calibrated.save(tmp, overwrite=True)  # the temporary file exists already
+        # FITS whatever the temporary name (astropy compresses a name ending in .gz); it exists already.
+        calibrated.save(tmp, filetype="fits", overwrite=True)
     both = np.isfinite(smap.data) & np.isfinite(calibrated.data)
     ratio = np.abs(calibrated.data[both]).sum() / max(np.abs(smap.data[both]).sum(), 1e-300)
     _say(args, f"wrote {args.out} (table {calibrated.meta['caltable']})")
     print(f"unsigned flux, calibrated / measured: {ratio:.4f} over {both.sum()} pixels")
     return EXIT_OK
+
+
+#: The names the calibrated map may take.
+_FITS_SUFFIXES = (".fits", ".fts", ".fit", ".fits.gz", ".fts.gz", ".fit.gz")
 
 
 def _record_open_flux(measured, calibrated):
@@ -318,6 +463,7 @@ def main(argv=None):
     """
     parser = build_parser()
     args = parser.parse_args(argv)
+    previous = _terminate_like_ctrl_c()
     try:
         if args.command == "config":
             from gongsynth.config import SimulationConfig
@@ -329,23 +475,53 @@ def main(argv=None):
         if args.command == "calibrate":
             return _run_calibrate(args)
         return _run_compare(args)
-    except FileExistsError as exc:
-        return _fail(f"{exc}", EXIT_EXISTS)
-    except FileNotFoundError as exc:
-        return _fail(f"file not found: {exc.filename or exc}", EXIT_USAGE)
-    except (IsADirectoryError, NotADirectoryError, PermissionError) as exc:
-        return _fail(_with_notes(f"error: {exc}", exc), EXIT_USAGE)
-    except (ValueError, TypeError, KeyError, u.UnitsError) as exc:
+    except (OSError, ValueError, TypeError, KeyError, u.UnitsError, CannotRunHereError, MemoryError,
+            KeyboardInterrupt) as exc:
+        return _fail(*_describe(exc))
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (``kill``, a batch system's time limit): stopped like Ctrl-C, output sets left whole."""
+
+
+def _terminate_like_ctrl_c():
+    """SIGTERM raises `Terminated` (the clean-up of Ctrl-C); the handler it replaced, or None."""
+    if threading.current_thread() is not threading.main_thread():
+        return None
+
+    def handler(signum, frame):
+        raise Terminated
+
+    return signal.signal(signal.SIGTERM, handler)
+
+
+def _describe(exc):
+    """The message and exit code of a failure (the README's table of exit codes)."""
+    if isinstance(exc, FileExistsError):
+        return f"{exc}", EXIT_EXISTS
+    if isinstance(exc, FileNotFoundError):
+        return f"file not found: {exc.filename or exc}", EXIT_USAGE
+    if isinstance(exc, (IsADirectoryError, NotADirectoryError, PermissionError)):
+        return _with_notes(f"error: {exc}", exc), EXIT_USAGE
+    if isinstance(exc, (ValueError, TypeError, KeyError, u.UnitsError)):
         # A KeyError's str() is the repr of its message: print the message itself.
         message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
-        return _fail(f"error: {message}", EXIT_USAGE)
-    except (CannotRunHereError, MemoryError) as exc:
-        return _fail(f"cannot run here: {exc or 'out of memory'}", EXIT_CANNOT_RUN)
-    except KeyboardInterrupt as exc:
-        return _fail(_with_notes("interrupted", exc), EXIT_INTERRUPTED)
-    except OSError as exc:  # a full disk, an I/O error: the output sets are atomic
+        return f"error: {message}", EXIT_USAGE
+    if isinstance(exc, (CannotRunHereError, MemoryError)):
+        what = str(exc) or ("out of memory: use a smaller --shape, a shorter --duration or fewer --workers, "
+                            "or a machine with more memory")
+        return f"cannot run here: {what}", EXIT_CANNOT_RUN
+    if isinstance(exc, Terminated):
+        return _with_notes("terminated (SIGTERM)", exc), EXIT_TERMINATED
+    if isinstance(exc, KeyboardInterrupt):
+        return _with_notes("interrupted", exc), EXIT_INTERRUPTED
+    if isinstance(exc, OSError):  # a full disk, an I/O error: the output sets are atomic
         where = f" ({exc.filename})" if exc.filename else ""
-        return _fail(_with_notes(f"error: {exc.strerror or exc}{where}", exc), EXIT_FAILURE)
+        return _with_notes(f"error: {exc.strerror or exc}{where}", exc), EXIT_FAILURE
+    return f"error: {type(exc).__name__}: {exc}", EXIT_FAILURE
 
 
 def _with_notes(message, exc):

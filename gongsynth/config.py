@@ -9,6 +9,8 @@ Sun chosen by ``sun`` (``[photosphere]``) and a `~gongsynth.GONGInstrument`
 that name the key.
 """
 import dataclasses
+import datetime
+import math
 import numbers
 import tomllib
 from dataclasses import dataclass, field, fields
@@ -25,7 +27,7 @@ from gongsynth.instrument import GONGInstrument
 from gongsynth.observing import GONG_SITES, check_site, like_gong
 from gongsynth.seeding import root_seed
 from gongsynth.stages.camera.integrate import ENGINES
-from gongsynth.stages.camera.schedule import n_frames_in
+from gongsynth.stages.camera.schedule import frame_schedule
 from gongsynth.suns import DEFAULT_SUNS, SUNS, default_sun, photosphere_defaults, run_grid_default
 from gongsynth.tomlfmt import toml_table
 
@@ -67,6 +69,9 @@ _DOCS = {
     "surface_field": "full-disk mode: the Sun's large-scale field: 'synthetic' (the seeded synthetic Sun of "
                      "the date; the default), 'quiet' (the quiet Sun everywhere), a magnetogram or synoptic "
                      "map's FITS path ('<array>': passed in memory)",
+    "atmosphere_sha256": "SHA-256 of that atmosphere (a folder: of its files), checked when the run is "
+                         "repeated",
+    "surface_field_sha256": "SHA-256 of that surface-field map file, checked when the run is repeated",
     "flat_file": "a user-supplied flat: its FITS path, or '<array>' (unset: the synthetic flat)",
     "flat_sha256": "SHA-256 of that flat, checked when the run is repeated",
     "dark_file": "a user-supplied dark: its FITS path, or '<array>' (unset: the synthetic dark)",
@@ -167,6 +172,46 @@ def _pointing(value, mode):
     return tuple(both.to(u.arcsec))
 
 
+def _check_timing(duration, instrument):
+    """The duration and the instrument's timing give every accumulation plane frames (before computing)."""
+    try:
+        frames = frame_schedule(duration, instrument).frames_per_plane
+    except ValueError as exc:
+        raise ValueError(f"duration = {duration} with this instrument's timing: {exc}") from exc
+    if min(frames) < 1:
+        both = (2 * instrument.lcvr_period).to(u.min)
+        raise ValueError(f"duration = {duration} leaves accumulation plane(s) without a frame "
+                         f"(frames per plane {list(map(int, frames))}): it must cover both LCVR states, "
+                         f"at least 2 × lcvr_period = {both:.4g}")
+
+
+def _check_dates(obstime, duration):
+    """Start and end of the observation within the years a FITS date can hold (0001-9999)."""
+    import warnings
+
+    with warnings.catch_warnings():    # ERFA's "dubious year" far from now: the check below says more
+        warnings.simplefilter("ignore")
+        start = Time(obstime)
+        years = start.ymdhms.year, (start + duration).ymdhms.year
+    if not (1 <= years[0] and years[1] <= 9999):
+        raise ValueError(f"obstime = {obstime!r} with duration {duration}: the observation must lie "
+                         f"within the years 0001-9999 (the FITS date format)")
+
+
+def _check_on_disk(pointing, obstime, instrument, pixels):
+    """A full-disk detector pointed where it sees part of the solar disk."""
+    from sunpy.coordinates import sun
+
+    half = (instrument.plate_scale * pixels / 2).to_value(u.arcsec)
+    radius = sun.angular_radius(Time(obstime)).to_value(u.arcsec)
+    tx, ty = (abs(p.to_value(u.arcsec)) for p in pointing)
+    gap = math.hypot(max(tx - half, 0.0), max(ty - half, 0.0))
+    if gap >= radius:
+        raise ValueError(f"pointing (Tx, Ty) = ({pointing[0]:g}, {pointing[1]:g}) puts the detector "
+                         f"(±{half:.0f}″) off the solar disk (radius {radius:.0f}″): point within "
+                         f"{half + radius:.0f}″ of the Sun's centre")
+
+
 def _same(a, b):
     """Whether two knob values are equal (Quantities in any equivalent unit)."""
     try:
@@ -255,6 +300,10 @@ class SimulationConfig:
         A model atmosphere as the input Sun instead of the built-in one: its
         path (read by `gongsynth.Atmosphere.read`), or ``"<array>"`` when it
         was passed to `gongsynth.simulate` in memory.
+    atmosphere_sha256, surface_field_sha256 : str or None
+        The `~gongsynth.files.fingerprint` of the atmosphere file (or folder)
+        and of the surface-field map file (their paths are recorded absolute);
+        a repeat of the run refuses a file that has changed.
     surface_field : str or None
         Full-disk mode: the large-scale radial field the small scales follow:
         ``"synthetic"`` (`gongsynth.sun.surface_field.synthetic_surface_field`
@@ -303,7 +352,9 @@ class SimulationConfig:
     effects: Effects = field(default_factory=Effects)
     photosphere: dict = field(default_factory=dict)
     atmosphere_file: str | None = None
+    atmosphere_sha256: str | None = None
     surface_field: str | None = None
+    surface_field_sha256: str | None = None
     flat_file: str | None = None
     flat_sha256: str | None = None
     dark_file: str | None = None
@@ -328,7 +379,9 @@ class SimulationConfig:
             value = value if name != "pointing" else u.Quantity(value)
             if not isinstance(value, u.Quantity) or not value.unit.is_equivalent(unit):
                 raise u.UnitsError(f"{name} must be a Quantity convertible to {unit}, got {value!r}")
-        n_frames_in(self.duration, self.instrument)  # finite, positive, a whole number of frames
+        if isinstance(self.obstime, (datetime.date, Time)):   # TOML's native date-time, a Time
+            object.__setattr__(self, "obstime", Time(self.obstime).isot)
+        _check_timing(self.duration, self.instrument)
         if self.engine not in ENGINES:
             raise ValueError(f"engine must be one of {ENGINES}, got {self.engine!r}")
         if self.mode not in MODES:
@@ -351,6 +404,9 @@ class SimulationConfig:
             raise ValueError(f"photosphere_shape must be two ints >= 4, got {self.photosphere_shape!r}")
         object.__setattr__(self, "photosphere_shape", tuple(int(n) for n in shape))
         Pointing(self.latitude, self.obstime)  # checks the latitude and the time, once, in one place
+        _check_dates(self.obstime, self.duration)
+        if self.mode == "full-disk":
+            _check_on_disk(self.pointing, self.obstime, self.instrument, self.detector_pixels)
         if self.workers is not None:
             if not _is_int(self.workers) or self.workers < 1:
                 raise ValueError(f"workers must be a positive int or None, got {self.workers!r}")
@@ -544,9 +600,17 @@ class SimulationConfig:
             raise KeyError(f"unknown key(s) {bad} in [simulation]; valid keys are {sorted(known)}")
         for name, (unit, _) in _QUANTITIES.items():
             if name in sim:
+                if isinstance(sim[name], list) and name != "pointing":
+                    raise ValueError(f"[simulation] {name} is one value, e.g. {name} = \"1 {unit}\", got the "
+                                     f"list {sim[name]!r}" + ("; a sweep of latitudes: gongsynth simulate "
+                                                               "--latitude 0 30 60, or simulate_many"
+                                                               if name == "latitude" else ""))
                 sim[name] = _quantity(name, sim[name], unit)
-        for name in ("resolutions", "photosphere_shape"):
+        for name, example in (("resolutions", "[1, 2, 4, 8]"), ("photosphere_shape", "[256, 256]")):
             if name in sim:
+                if not isinstance(sim[name], (list, tuple)):
+                    raise TypeError(f"[simulation] {name} is a list, e.g. {name} = {example}, "
+                                    f"got {sim[name]!r}")
                 sim[name] = tuple(sim[name])
         instrument = GONGInstrument.from_dict(table.get("instrument", {}))
         if sim.get("like") is not None:

@@ -106,7 +106,7 @@ def atomic_path(path, *, overwrite=False):
 
 def fingerprint(data):
     """
-    SHA-256 of a detector map given as a FITS path or an array (values and unit).
+    SHA-256 of a file, of a folder's files (names and contents), or of an array (values and unit).
 
     Parameters
     ----------
@@ -123,6 +123,11 @@ def fingerprint(data):
     True
     """
     digest = hashlib.sha256()
+    if isinstance(data, (str, Path)) and Path(data).is_dir():   # a folder (a MURaM snapshot): its files
+        for path in sorted(p for p in Path(data).rglob("*") if p.is_file()):
+            digest.update(path.relative_to(data).as_posix().encode())
+            digest.update(fingerprint(path).encode())
+        return digest.hexdigest()
     if isinstance(data, (str, Path)):
         with open(data, "rb") as handle:
             for block in iter(lambda: handle.read(1 << 20), b""):

@@ -22,7 +22,8 @@ from gongsynth.resources import check_resources
 from gongsynth.sun.atmosphere import Atmosphere
 from gongsynth.version import version as __version__
 
-__all__ = ["SimulationResult", "Sweep", "simulate", "simulate_many"]
+__all__ = ["SimulationResult", "Sweep", "simulate", "simulate_many", "simulate_each", "check_scene",
+           "record_input_file"]
 
 @dataclass
 class SimulationResult:
@@ -256,6 +257,7 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="bl
         raise TypeError(f"pass either config or the run's arguments, not both: {sorted(_given(arguments))}")
     check_resources(config)
     config, stokes = _input_atmosphere(config, stokes)
+    check_scene(config, stokes)
     config, surface_field = _surface_field(config, surface_field)
     config, flat = _detector_map(config, "flat", flat)
     config, dark = _detector_map(config, "dark", dark)
@@ -268,6 +270,36 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="bl
         continuum=state["continuum_map"], truth=state["truth_map"], truth_psf=state["truth_psf_map"],
         raw=state["raw"], expected_counts=state["expected_counts"],
         resolution_map=state["light"].resolution_map(), config=config, timings=timings, chain=chain)
+
+
+def check_scene(config, stokes=None):
+    """
+    Refuse, before any computing, a tiled scene whose tile is smaller than a detector pixel.
+
+    Parameters
+    ----------
+    config : `~gongsynth.config.SimulationConfig`
+    stokes : `~gongsynth.StokesCube` or `~gongsynth.Atmosphere`, optional
+        The input Sun (default: the built-in one of ``config``).
+
+    Raises
+    ------
+    ValueError
+        As `gongsynth.stages.scene.tiled.check_tile_extent`.
+    """
+    from gongsynth.geometry import Pointing
+    from gongsynth.stages.scene.tiled import check_tile_extent
+
+    if config.mode != "tiled":
+        return
+    if isinstance(stokes, Atmosphere):
+        shape, pixel = stokes.shape[1:], stokes.pixel_size
+    elif stokes is not None:
+        shape, pixel = stokes.I.shape[:2], stokes.pixel_size
+    else:
+        shape, pixel = config.photosphere_shape, config.photosphere_pixel_size
+    check_tile_extent(shape, pixel, Pointing(config.latitude, config.obstime), config.resolutions,
+                      config.instrument)
 
 
 def _detector_map(config, name, given):
@@ -306,7 +338,8 @@ def _input_atmosphere(config, stokes):
         if recorded == IN_MEMORY:
             raise ValueError("this configuration's input Sun was an Atmosphere passed in memory "
                              "(atmosphere_file = '<array>'): pass it again as simulate's first argument")
-        return config, Atmosphere.read(recorded)
+        config = record_input_file(config, "atmosphere_file", "atmosphere_sha256")
+        return config, Atmosphere.read(config.atmosphere_file)
     if isinstance(stokes, Atmosphere) and recorded is None:
         return config.replace(atmosphere_file=IN_MEMORY), stokes
     return config, stokes
@@ -326,10 +359,57 @@ def _surface_field(config, given):
                              "(surface_field = '<array>'): pass it again as surface_field=")
         given = recorded
     if isinstance(given, (str, Path)):
-        return config.replace(surface_field=str(given)), sunpy.map.Map(str(given))
+        from gongsynth.analysis.observations import load_observation
+
+        config = record_input_file(config.replace(surface_field=str(given)), "surface_field",
+                                   "surface_field_sha256", folder=False)
+        try:   # the checks every observation gets: kind and unit, WCS, finite data
+            return config, load_observation(config.surface_field, kind="magnetogram")
+        except ValueError as exc:
+            raise ValueError(f"surface_field {given}: {exc}") from exc
     if not isinstance(given, sunpy.map.GenericMap):
         raise TypeError(f"surface_field must be a sunpy Map or a FITS path, got {type(given).__name__}")
     return config.replace(surface_field=IN_MEMORY), given
+
+
+def record_input_file(config, key, sha_key, *, folder=True):
+    """
+    ``config`` with an input file recorded by absolute path and SHA-256; a file that changed is refused.
+
+    Parameters
+    ----------
+    config : `~gongsynth.config.SimulationConfig`
+    key, sha_key : str
+        The fields holding the path and its digest (``"atmosphere_file"``, ``"atmosphere_sha256"``).
+    folder : bool, optional
+        Whether the input may be a folder (a MURaM snapshot).
+
+    Returns
+    -------
+    `~gongsynth.config.SimulationConfig`
+
+    Raises
+    ------
+    FileNotFoundError
+        If the path does not exist.
+    ValueError
+        If the file's SHA-256 differs from the one recorded.
+    """
+    text = getattr(config, key)
+    if "://" in text:
+        raise ValueError(f"{key} {text!r}: a URL; gongsynth reads local files only (download it first)")
+    path = Path(text).absolute()
+    if not text or not path.exists():
+        raise FileNotFoundError(2, f"no such {key} file or folder", text)
+    if path.is_dir() and not folder:
+        raise IsADirectoryError(f"{key} {path} is a folder, not a FITS file")
+    digest = fingerprint(path)
+    recorded = getattr(config, sha_key)
+    if recorded is not None and digest != recorded:
+        raise ValueError(f"{key} {path} has changed since this configuration recorded it (sha256 "
+                         f"{recorded[:12]}..., now {digest[:12]}...): restore it, or delete {sha_key} from "
+                         f"the configuration to run with the new file")
+    return config.replace(**{key: str(path), sha_key: digest})
 
 
 def _given(arguments):
@@ -384,8 +464,6 @@ def simulate_many(*, latitudes=(0, 25, 45, 60, 70, 75) * u.deg, seeds=None, conf
     >>> [float(r.config.latitude.value) for r in runs], runs[0].config.seed == runs[1].config.seed
     ([0.0, 45.0], True)
     """
-    from tqdm.auto import tqdm
-
     latitudes = u.Quantity(latitudes, u.deg).ravel()
     if config is None:
         config = SimulationConfig.from_arguments(**_config_kwargs(kwargs))
@@ -399,25 +477,75 @@ def simulate_many(*, latitudes=(0, 25, 45, 60, 70, 75) * u.deg, seeds=None, conf
     configs = [config.replace(latitude=lat, seed=int(s)) for lat, s in zip(latitudes, seeds)]
     check_resources(config)
 
-    if client is None and (workers is None or workers <= 1):
-        return Sweep(simulate(config=c, progress=False)
-                     for c in tqdm(configs, disable=not progress, desc="sweep"))
-    distributed = import_optional("dask.distributed", "dask")
-    Client, LocalCluster = distributed.Client, distributed.LocalCluster
-    as_completed = distributed.as_completed
+    results = [None] * len(configs)
+    for index, result in simulate_each(configs, client=client, workers=workers, progress=progress):
+        if isinstance(result, BaseException):
+            raise result
+        results[index] = result
+    return Sweep(results)
 
+
+def simulate_each(configs, *, stokes=None, client=None, workers=None, progress=True):
+    """
+    Run several configurations and yield each result as soon as it is done (to save it at once).
+
+    A run that fails does not stop the others: its exception is yielded in
+    place of its result (Ctrl-C stops them all).
+
+    Parameters
+    ----------
+    configs : sequence of `~gongsynth.config.SimulationConfig`
+    stokes : `~gongsynth.StokesCube` or `~gongsynth.Atmosphere`, optional
+        The input Sun of every run (then they run serially, in this process).
+    client : `dask.distributed.Client`, optional
+        Run on this client.
+    workers : int, optional
+        Without a client: this many local Dask worker processes (``None`` or 1: serially).
+    progress : bool
+        A progress bar over the runs.
+
+    Yields
+    ------
+    (int, `SimulationResult` or Exception)
+        The run's index in ``configs`` and its result, in the order the runs finish.
+
+    Examples
+    --------
+    >>> import astropy.units as u
+    >>> from gongsynth.config import SimulationConfig
+    >>> base = SimulationConfig(seed=2, detector_shape=16, duration=1 * u.min, resolutions=(1,),
+    ...                         photosphere_shape=(64, 64), photosphere_pixel_size=1536 * u.km,
+    ...                         sun="milne-eddington")
+    >>> [i for i, r in simulate_each([base, base.replace(latitude=45 * u.deg)], progress=False)]
+    [0, 1]
+    """
+    from tqdm.auto import tqdm
+
+    configs = list(configs)
+    bar = tqdm(total=len(configs), disable=not progress, desc="sweep")
+    if stokes is not None or (client is None and (workers is None or workers <= 1)):
+        for index, config in enumerate(configs):
+            try:
+                result = simulate(stokes, config=config, progress=False)
+            except Exception as exc:  # noqa: BLE001 - reported with its run; Ctrl-C still stops the sweep
+                result = exc
+            bar.update()
+            yield index, result
+        bar.close()
+        return
+    distributed = import_optional("dask.distributed", "dask")
     own = client is None
     if own:
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               dashboard_address=None)
-        client = Client(cluster)
+        cluster = distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                           dashboard_address=None)
+        client = distributed.Client(cluster)
     try:
-        futures = [client.submit(simulate, config=c, progress=False, pure=False) for c in configs]
-        bar = tqdm(total=len(futures), disable=not progress, desc="sweep")
-        for _ in as_completed(futures):
+        futures = {client.submit(simulate, config=c, progress=False, pure=False): i
+                   for i, c in enumerate(configs)}
+        for future in distributed.as_completed(futures):
             bar.update()
+            yield futures[future], (future.exception() if future.status == "error" else future.result())
         bar.close()
-        return Sweep(client.gather(futures))
     finally:
         if own:
             client.close()

@@ -105,7 +105,7 @@ def _apply(values, theta, table, region):
     return out
 
 
-def calibrate(smap, *, table=None):
+def calibrate(smap, *, table=None, force=False):
     """
     Calibrate a magnetogram: replace each measured value by the true B_LOS it implies.
 
@@ -117,6 +117,11 @@ def calibrate(smap, *, table=None):
     table : `~astropy.table.QTable` or path-like, optional
         Calibration table (`gongsynth.analysis.calibration_table`); default
         the table shipped with gongsynth.
+    force : bool, optional
+        Calibrate even a map that is not a measurement: one calibrated
+        already (its ``CALTABLE``: a second calibration multiplies the
+        correction again) or a gongsynth ground-truth map.  Refused (ValueError)
+        unless true.
 
     Returns
     -------
@@ -125,6 +130,14 @@ def calibrate(smap, *, table=None):
         the table and a HISTORY line.
     """
     check_map(smap)
+    content = str(smap.meta.get("content", ""))
+    if not force and "caltable" in smap.meta:
+        raise ValueError(f"the map is calibrated already (CALTABLE = {smap.meta['caltable']!r}): calibrating "
+                         f"it again would multiply the correction; calibrate the measured map instead, or "
+                         f"force it (calibrate --force)")
+    if not force and content.upper().startswith("TRUE B_LOS"):
+        raise ValueError(f"the map is a ground-truth map (CONTENT = {content!r}), not a measurement: "
+                         f"calibrate the magnetogram, or force it (calibrate --force)")
     if table is None or not hasattr(table, "colnames"):
         table = read_calibration_table(table)
     measured = gauss_values(smap, "smap")

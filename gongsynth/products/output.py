@@ -315,16 +315,23 @@ def _finish_moves(stage, directory):
 
 @contextlib.contextmanager
 def _ctrl_c_held():
-    """Hold back SIGINT (Ctrl-C) for the block, then raise KeyboardInterrupt if one came."""
+    """
+    Hold back SIGINT (Ctrl-C) and SIGTERM for the block, then raise KeyboardInterrupt if one came
+    (a SIGTERM: through the handler it had, e.g. the command line's).
+    """
     if threading.current_thread() is not threading.main_thread():
         yield
         return
     caught = []
-    previous = signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
+    previous = {sig: signal.signal(sig, lambda signum, frame: caught.append(signum))
+                for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, previous)
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+    if signal.SIGTERM in caught and callable(previous[signal.SIGTERM]):
+        previous[signal.SIGTERM](signal.SIGTERM, None)
     if caught:
         raise KeyboardInterrupt
 

@@ -24,6 +24,13 @@ _UNITS = {"temperature": u.K, "gas_pressure": u.Unit("dyn cm-2"), "density": u.U
           "electron_density": u.Unit("cm-3"), "velocity": u.km / u.s, "magnetic_field": u.G,
           "microturbulence": u.km / u.s}
 _POSITIVE = ("temperature", "gas_pressure", "density", "electron_density")
+#: Largest magnitude of each component accepted (physical ranges; beyond them the input is an error):
+#: velocity 300 km/s, twice the fastest chromospheric flows (type II spicules, 50-150 km/s,
+#: De Pontieu et al. 2007, PASJ 59, S655) and the range over which the fast solver is tested against
+#: the reference one (tests/test_faults.py); magnetic field 20 kG, over twice the strongest field
+#: measured on the Sun (8.2 kG, Okamoto & Sakurai 2018, ApJL 852, L16); microturbulence 50 km/s,
+#: twice the largest of the FAL models (FAL-B, 25 km/s, Fontenla et al. 1993, ApJ 406, 319).
+_LIMITS = {"velocity": 300.0, "magnetic_field": 2.0e4, "microturbulence": 50.0}
 
 
 def _as_array(value, name, unit):
@@ -122,6 +129,11 @@ class Atmosphere:
             raise ValueError(f"{name} must be positive everywhere")
         if name == "microturbulence" and (arr < 0).any():
             raise ValueError("microturbulence must be >= 0")
+        limit = _LIMITS.get(name)
+        if limit is not None and arr.size and max(float(arr.max()), -float(arr.min())) > limit:
+            worst = max(float(arr.max()), -float(arr.min()))
+            raise ValueError(f"{name} reaches {worst:.3g} {_UNITS[name]}; a solar atmosphere stays within "
+                             f"{limit:g} {_UNITS[name]} (each component)")
         return view if view.shape != arr.shape else arr
 
     # --- readers ---------------------------------------------------------------------------------
@@ -155,6 +167,9 @@ class Atmosphere:
     def from_1d(cls, path):
         """
         Read a 1-D SIR ``.mod``, Hazel ``.1d`` or RH ``.atmos`` model as a 1 × 1 column.
+
+        The column is horizontally uniform; its spacing is
+        `~gongsynth.sun.atmosphere_files.UNIFORM_PIXEL_KM`, so that it tiles any field.
 
         Parameters
         ----------
@@ -221,9 +236,10 @@ class Atmosphere:
             raise FileNotFoundError(2, "no such atmosphere file or folder", str(path))
         if path.suffix.lower() in (".h5", ".hdf5"):
             try:
-                return cls.from_file(path)
+                arrays = files.read_hdf5(path)
             except (KeyError, ValueError):  # not gongsynth's layout: the ART/Bifrost one
                 return cls.from_art(path)
+            return cls._from_arrays(arrays)  # its values checked: an error here is the file's
         return cls.from_1d(path)
 
     def to_file(self, path, *, overwrite=False):

@@ -38,10 +38,15 @@ from gongsynth.optional import import_optional
 from gongsynth.sun.rt.eos import AMU, K_BOLTZMANN, MEAN_MASS_PER_H, PARTICLES_PER_H, electron_density
 from gongsynth.sun.rt.hydrostatic import heights_from_column_mass, hydrostatic_tau_scale
 
-__all__ = ["read_muram", "read_1d", "read_art", "read_hdf5", "write_hdf5", "FORMAT_TAG", "muram_temperature"]
+__all__ = ["read_muram", "read_1d", "read_art", "read_hdf5", "write_hdf5", "FORMAT_TAG", "muram_temperature",
+           "UNIFORM_PIXEL_KM"]
 
 #: The ``format`` attribute of gongsynth's HDF5 atmosphere files.
 FORMAT_TAG = "gongsynth-atmosphere-1"
+#: The column spacing (km) given to a 1-D model: one horizontally uniform column, so any spacing is the
+#: same atmosphere; this one (about 14 solar radii) makes the column cover a detector pixel at any viewing
+#: angle down to μ = 1e-3 (14 arcsec there), so that a 1-D model tiles any field.
+UNIFORM_PIXEL_KM = 1.0e7
 _FIELDS = ("temperature", "gas_pressure", "density", "electron_density", "velocity", "magnetic_field",
            "microturbulence")
 
@@ -235,7 +240,7 @@ def read_1d(path):
                 density=grid(col["density"]), electron_density=grid(col["electron_density"]),
                 velocity=np.stack([grid(zero), grid(zero), grid(col["vz"])]),
                 magnetic_field=np.stack([grid(bx), grid(by), grid(bz)]),
-                microturbulence=grid(col["microturbulence"]), z=col["z"], pixel_size=1.0,
+                microturbulence=grid(col["microturbulence"]), z=col["z"], pixel_size=UNIFORM_PIXEL_KM,
                 meta={"origin": f"1-D model ({suffix})", "path": os.fspath(path)})
 
 

@@ -45,6 +45,7 @@ from pathlib import Path
 import astropy.units as u
 import numpy as np
 
+from gongsynth.files import fingerprint
 from gongsynth.instrument import resolve_instrument
 from gongsynth.seeding import as_seed_sequence, child_sequence
 from gongsynth.stages.scene.library_layout import library_layout
@@ -57,7 +58,7 @@ from gongsynth.sun.photosphere import (
 )
 
 __all__ = ["LEVELS", "STRONG_FIELDS", "DEFAULT_THETA", "LIBRARY_SEED", "PatchLibrary", "build_library",
-           "cached_library", "cache_directory"]
+           "cached_library", "cache_directory", "CacheWarning"]
 
 #: The patch levels: name and the `model_photosphere` knobs that set them (no
 #: sunspot, no plage patches: the flux sits in network elements of
@@ -383,10 +384,53 @@ def _key(arguments, sun):
     return digest.hexdigest()[:24]
 
 
-def _save(library, folder):
-    folder.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=folder.name + ".", dir=folder.parent))
+# Temporary folders of a save are "<entry>.tmp-<pid>-<random>"; one older than this whose process is gone
+# (or older than an hour: another machine's) was left by a killed save.
+_STALE_SECONDS = 60.0
+_VERIFIED = set()    # entries whose checksums this process has checked
+
+
+class CacheWarning(UserWarning):
+    """The library cache could not be used (unwritable, or a damaged entry): the run goes on without it."""
+
+
+def _warn(message):
+    import warnings
+
+    warnings.warn(message, CacheWarning, stacklevel=3)
+
+
+def _clean_stale(parent):
+    """Remove the temporary folders of killed saves (another process's live one is left alone)."""
+    import time
+
+    for tmp in parent.glob("library-*.tmp-*"):
+        try:
+            age = time.time() - tmp.stat().st_mtime
+            pid = int(tmp.name.split(".tmp-")[1].split("-")[0])
+        except (OSError, ValueError, IndexError):
+            continue
+        if age > 3600 or (age > _STALE_SECONDS and not _alive(pid)):
+            shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _alive(pid):
     try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:     # exists, another user's
+        return True
+    return True
+
+
+def _save(library, folder):
+    """Write an entry atomically (replacing a damaged one), each file's SHA-256 in library.json."""
+    tmp = None
+    try:
+        folder.parent.mkdir(parents=True, exist_ok=True)
+        _clean_stale(folder.parent)
+        tmp = Path(tempfile.mkdtemp(prefix=f"{folder.name}.tmp-{os.getpid()}-", dir=folder.parent))
         for name in _ARRAYS:
             np.save(tmp / f"{name}.npy", getattr(library, name))
         for name in _BASIS:
@@ -394,15 +438,41 @@ def _save(library, folder):
         small = {"level_patches": [list(p) for p in library.level_patches],
                  "level_uniform": list(library.level_uniform), "pixel_km": library.pixel_size.to_value(u.km),
                  "n_e": library.n_e, "e_index": list(library.e_index), "v_sign": list(library.v_sign),
-                 "mirror_ok": library.mirror_ok, "basis_error": library.basis.error, "meta": library.meta}
+                 "mirror_ok": library.mirror_ok, "basis_error": library.basis.error, "meta": library.meta,
+                 "sha256": {p.name: fingerprint(p) for p in sorted(tmp.glob("*.npy"))}}
         (tmp / "library.json").write_text(json.dumps(small))
+        if folder.exists():   # a damaged entry: moved aside, then removed
+            old = Path(tempfile.mkdtemp(prefix=f"{folder.name}.tmp-{os.getpid()}-", dir=folder.parent))
+            folder.rename(old / "entry")
+            shutil.rmtree(old, ignore_errors=True)
         tmp.rename(folder)
-    except OSError:
-        shutil.rmtree(tmp, ignore_errors=True)   # another process won the race, or no room: no cache
+        _VERIFIED.add(folder)
+    except OSError as exc:
+        if tmp is not None:
+            shutil.rmtree(tmp, ignore_errors=True)
+        if not (folder / "library.json").is_file():   # not another process's entry that won the race
+            _warn(f"could not write the patch library to the cache {folder.parent} ({exc.strerror or exc}); "
+                  f"the run goes on with the library in memory (set GONGSYNTH_CACHE_DIR to a writable "
+                  f"folder, or to 'off' for no disk cache)")
+
+
+def _verify(folder, small):
+    """Each stored file's SHA-256 against library.json (once per process): ValueError if one differs."""
+    if folder in _VERIFIED:
+        return
+    sums = small.get("sha256")
+    if not isinstance(sums, dict) or set(sums) != {f"{n}.npy" for n in _ARRAYS + tuple(f"basis_{b}" for b in
+                                                                                         _BASIS)}:
+        raise ValueError("no checksums")
+    for name, digest in sums.items():
+        if fingerprint(folder / name) != digest:
+            raise ValueError(f"{name} does not match its checksum")
+    _VERIFIED.add(folder)
 
 
 def _load(folder, line):
     small = json.loads((folder / "library.json").read_text())
+    _verify(folder, small)
     arrays = {name: np.load(folder / f"{name}.npy", mmap_mode="r" if name == "patches" else None)
               for name in _ARRAYS}
     basis = ShiftBasis(**{name: np.load(folder / f"basis_{name}.npy") for name in _BASIS},
@@ -465,13 +535,14 @@ def cached_library(*, sun="milne-eddington", progress=False, **arguments):
         return _MEMO[key]
     folder = None if cache_directory() is None else cache_directory() / f"library-{key}"
     library = None
-    if folder is not None and (folder / "library.json").is_file():
+    if folder is not None and folder.exists():
         try:
             # ``line`` is the Milne-Eddington NiLine, or the 3-D library's spectral line (then the rows'
             # limb darkening is NiLine's too, see library_rt).
             me_line = arguments.get("line")
             library = _load(folder, me_line if isinstance(me_line, NiLine) else NiLine())
-        except (OSError, ValueError, KeyError):
+        except (OSError, ValueError, KeyError, TypeError) as exc:
+            _warn(f"the cached patch library {folder} is damaged ({exc}); it is rebuilt and replaced")
             library = None
     if library is None:
         library = build()

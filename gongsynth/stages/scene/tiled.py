@@ -36,7 +36,7 @@ from gongsynth.stages.channels import CHANNEL_UNIT
 from gongsynth.stages.scene.scene import DeferredStack, Scene, radiance_at_earth, sky_grid
 from gongsynth.validation import check_finite, check_quantity
 
-__all__ = ["tile", "tiled_scenes"]
+__all__ = ["tile", "tiled_scenes", "check_tile_extent"]
 
 def _hat_antiderivative(t):
     """∫ of the unit hat (support |t| < 1) from -inf to t."""
@@ -191,6 +191,53 @@ def _tile_stack(values, pixel_km, shape, scale, km_per_arcsec, mu, regions, dtyp
 
 
 @u.quantity_input
+def check_tile_extent(shape, pixel_size, pointing, resolutions, instrument=None):
+    """
+    Refuse a tile that, foreshortened at the pointing, is smaller than one detector pixel.
+
+    Cheap: called before the spectra are computed as well as when tiling.
+
+    Parameters
+    ----------
+    shape : (int, int)
+        The tile's columns (ny, nx).
+    pixel_size : `~astropy.units.Quantity`
+        Their spacing (length).
+    pointing : `~gongsynth.geometry.Pointing`
+    resolutions : sequence of positive numbers
+        The tile's magnifications.
+    instrument : `~gongsynth.GONGInstrument`, optional
+
+    Raises
+    ------
+    ValueError
+        Naming the tile, its extent on the sky and what to change.
+
+    Examples
+    --------
+    >>> import astropy.units as u
+    >>> from gongsynth.geometry import Pointing
+    >>> check_tile_extent((64, 64), 1536 * u.km, Pointing(89.5 * u.deg), (1,))  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    ValueError: the tile (64×64 columns of pixel_size 1536 km) spans only 1.17″ × 134″ on the sky ...
+    """
+    inst = resolve_instrument(instrument)
+    plate = inst.plate_scale.to_value(u.arcsec)
+    pix = pixel_size.to_value(u.km)
+    mu = pointing.mu
+    kpa = pointing.km_per_arcsec.to_value(u.km / u.arcsec)
+    ny, nx = shape
+    extent = (ny * pix * mu * min(resolutions) / kpa, nx * pix * min(resolutions) / kpa)  # arcsec on the sky
+    if min(extent) < plate:
+        raise ValueError(
+            f"the tile ({ny}×{nx} columns of pixel_size {pixel_size:g}) spans only "
+            f"{extent[0]:.3g}″ × {extent[1]:.3g}″ on the sky at latitude {pointing.latitude:g} "
+            f"(μ = {mu:.3g}): smaller than one {plate:g}″ detector pixel; choose a latitude nearer the "
+            f"disk centre or a larger photosphere (photosphere_shape × photosphere_pixel_size)"
+        )
+
+
 def tile(stack, pixel_size: u.km, *, pointing=None, resolutions=(1, 2, 4, 8), instrument=None,
          detector_shape=None, shape=None, dtype=np.float64, deferred=False):
     """
@@ -254,16 +301,7 @@ def tile(stack, pixel_size: u.km, *, pointing=None, resolutions=(1, 2, 4, 8), in
     pix = pixel_size.to_value(u.km)
     if not (math.isfinite(pix) and pix > 0):
         raise ValueError(f"pixel_size must be positive and finite, got {pixel_size}")
-    plate = inst.plate_scale.to_value(u.arcsec)
-    ny, nx = values.shape[1:]
-    extent = (ny * pix * mu * min(res) / kpa, nx * pix * min(res) / kpa)  # arcsec on the sky
-    if min(extent) < plate:
-        raise ValueError(
-            f"the tile ({ny}×{nx} columns of pixel_size {pixel_size:g}) spans only "
-            f"{extent[0]:.3g}″ × {extent[1]:.3g}″ on the sky at latitude {pointing.latitude:g} "
-            f"(μ = {mu:.3g}): "
-            f"smaller than one {plate:g}″ detector pixel"
-        )
+    check_tile_extent(values.shape[1:], pixel_size, pointing, res, inst)
     args = (values, pix, grid, scale.to_value(u.arcsec), kpa, mu, _quadrants(grid, res, det), np.dtype(dtype))
     if deferred:
         tiler = _tiler(*args)

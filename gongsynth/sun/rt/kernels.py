@@ -317,8 +317,8 @@ _EXP_TAYLOR = np.array([(-1.0) ** n / math.factorial(n) for n in range(16)])
 @nb.njit(cache=True, inline="always")
 def _exp_neg(t):
     """e^(−t), t ≥ 0, without a library call (vectorisable): 2^(−n) e^(−r), r ∈ [0, ln 2), Taylor to r¹⁵."""
-    t = min(t, 746.0)                                   # e^(-t) = 0 in float64 beyond 745.2
-    n = int(t * 1.4426950408889634)
+    t = min(max(t, 0.0), 746.0)                         # e^(-t) = 0 in float64 beyond 745.2
+    n = min(max(int(t * 1.4426950408889634), 0), 1079)   # in the table whatever t is (NaN included)
     r = (t - n * 0.6931471803691238) - n * 1.9082149292705877e-10
     p = _EXP_TAYLOR[15]
     for m in range(14, -1, -1):

@@ -196,7 +196,7 @@ def point_opacity(t, ne, nh, vturb, const, pf_table):
     kc, n_hi = _continuum(lam, t, ne, nh)
     kt_ev = t / _EV_K
     x = (math.log(min(max(t, 1000.0), 20000.0)) - _PF_LNT[0]) / (_PF_LNT[1] - _PF_LNT[0])
-    i = min(int(x), _PF_LNT.size - 2)
+    i = min(max(int(x), 0), _PF_LNT.size - 2)
     w = x - i
     ln_u1 = pf_table[0, i] * (1 - w) + pf_table[0, i + 1] * w
     ln_u2 = pf_table[1, i] * (1 - w) + pf_table[1, i + 1] * w

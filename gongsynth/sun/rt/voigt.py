@@ -136,8 +136,8 @@ def w_table(x, y):
     0.94599
     """
     ax = abs(x)
-    ix = min(int(ax * (1.0 / TABLE_STEP) + 0.5), TABLE_NX - 1)
-    iy = min(int(y * (1.0 / TABLE_STEP) + 0.5), TABLE_NY - 1)
+    ix = min(max(int(min(ax, 1e6) * (1.0 / TABLE_STEP) + 0.5), 0), TABLE_NX - 1)   # in the table for any
+    iy = min(max(int(min(y, 1e6) * (1.0 / TABLE_STEP) + 0.5), 0), TABLE_NY - 1)    # x, y (NaN, inf too)
     dx = ax - ix * TABLE_STEP
     dy = y - iy * TABLE_STEP
     wr = _TABLE[iy, ix, 6, 0]
