@@ -5,7 +5,8 @@ import tempfile
 
 from astropy.utils import iers
 
-_CACHE = tempfile.mkdtemp(prefix="gongsynth-test-cache-")
+#: The environment variable that pytest-xdist sets in its worker processes.
+_XDIST_WORKER = "PYTEST_XDIST_WORKER"
 
 
 def pytest_configure(config):
@@ -16,9 +17,16 @@ def pytest_configure(config):
     # bundled table covers every date the tests use.
     iers.conf.auto_download = False
     # Full-disk patch libraries built by the tests go to a fresh folder, not the user's cache.
-    os.environ["GONGSYNTH_CACHE_DIR"] = _CACHE
+    # Under pytest-xdist the main process makes it before starting the workers, which inherit
+    # it: every worker shares one cache (saves are atomic), so a library is built once per run.
+    if os.environ.get(_XDIST_WORKER):
+        return
+    config.gongsynth_test_cache = tempfile.mkdtemp(prefix="gongsynth-test-cache-")
+    os.environ["GONGSYNTH_CACHE_DIR"] = config.gongsynth_test_cache
 
 
 def pytest_unconfigure(config):
-    """Remove the test run's library cache."""
-    shutil.rmtree(_CACHE, ignore_errors=True)
+    """Remove the test run's library cache (the process that made it does)."""
+    folder = getattr(config, "gongsynth_test_cache", None)
+    if folder is not None:
+        shutil.rmtree(folder, ignore_errors=True)
