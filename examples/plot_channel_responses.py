@@ -24,7 +24,7 @@ from gongsynth.stages.filters import (
     modulation_amplitude,
     prefilter_transmission,
 )
-from gongsynth.stages.reduction import measured_phase
+from gongsynth.instruments.gong.reduction import measured_phase
 
 gong = GONGInstrument()
 lam0 = gong.line_wavelength

@@ -305,7 +305,8 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
             return {"light": light, "truth_scene": truth}
 
         stages.append(Stage("channels", ("stokes",), ("channels",), channels,
-                            "Mueller matrix and filter weights: spectra -> six planes (block by block)"))
+                            "Mueller matrix and filter weights: spectra -> the instrument's planes "
+                            "(block by block)"))
         stages.append(Stage("scene", ("channels", "stokes"), ("light", "truth_scene"), scene,
                             "the planes tiled on the sky at the pointing"))
 
@@ -343,7 +344,7 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
     stages.append(Stage("camera", ("expected_counts",), ("raw",), camera,
                         "frames, flat, dark, photon and read noise, dither, truncation"))
     stages.append(Stage("reduction", ("raw", "expected_counts"), ("observables", "sky"), reduction,
-                        "dark, flat, three-phase Doppler, B_LOS, pseudo-continuum"))
+                        "dark, flat, the instrument's algorithm: Doppler, B_LOS, continuum"))
     stages.append(Stage("maps", ("observables", "sky", "truth", "truth_psf", "light"),
                         tuple(f"{p}_map" for p in PRODUCTS), maps,
                         "sunpy Maps with helioprojective WCS; sky blanked"))
@@ -401,7 +402,7 @@ def unmeasured(expected_counts, config):
     Parameters
     ----------
     expected_counts : `~astropy.units.Quantity`
-        (6, ny, nx) expected electrons per frame.
+        (K, ny, nx) expected electrons per frame.
     config : `~gongsynth.config.SimulationConfig`
 
     Returns
@@ -441,8 +442,7 @@ def run_header(config):
         "aeff": (inst.effective_area.to_value(u.cm**2), "[cm2] effective area"),
         "gain": (inst.gain.to_value(u.electron / u.adu), "[e/ADU] gain"),
         "rdnoise": (inst.read_noise.to_value(u.adu), "[ADU] read noise"),
-        "landeg": (inst.lande_g.to_value(u.one), "Lande factor used in the inversion"),
-        "v0": (inst.v0.to_value(u.m / u.s / u.rad), "[m/s/rad] Michelson velocity scale"),
+        **inst.header_cards(),   # the instrument's own inversion constants (GONG: Lande factor, v0)
     }
     if config.mode == "tiled":  # a full-disk scene has no single field-centre latitude
         cards = {"simlat": (config.latitude.to_value(u.deg), "[deg] field-centre latitude"), **cards}

@@ -21,11 +21,10 @@ from astropy.time import Time
 
 from gongsynth.geometry import DEFAULT_OBSTIME as _DEFAULT_TIME
 from gongsynth.geometry import Pointing
-from gongsynth.instrument import GONGInstrument
+from gongsynth.instruments.gong.parameters import GONGInstrument
 from gongsynth.observing import GONG_SITES, check_site, like_gong
 from gongsynth.seeding import root_seed
 from gongsynth.stages.camera.integrate import ENGINES
-from gongsynth.stages.camera.schedule import n_frames_in
 from gongsynth.suns import DEFAULT_SUNS, SUNS, default_sun, photosphere_defaults, run_grid_default
 from gongsynth.tomlfmt import toml_table
 
@@ -328,7 +327,7 @@ class SimulationConfig:
             value = value if name != "pointing" else u.Quantity(value)
             if not isinstance(value, u.Quantity) or not value.unit.is_equivalent(unit):
                 raise u.UnitsError(f"{name} must be a Quantity convertible to {unit}, got {value!r}")
-        n_frames_in(self.duration, self.instrument)  # finite, positive, a whole number of frames
+        self.instrument.schedule(self.duration)  # finite, positive, a whole number of frames
         if self.engine not in ENGINES:
             raise ValueError(f"engine must be one of {ENGINES}, got {self.engine!r}")
         if self.mode not in MODES:

@@ -34,7 +34,7 @@ import numpy as np
 import scipy.interpolate
 import scipy.special
 
-from gongsynth.instrument import resolve_instrument
+from gongsynth import instruments
 from gongsynth.validation import check_finite
 
 __all__ = ["psf_profile", "psf_kernel", "normalize_kernel", "psf_instrument", "wrapped_kernel", "fft_workers"]
@@ -124,7 +124,7 @@ def psf_instrument(instrument=None, *, seeing=True):
     >>> psf_instrument(seeing=False).seeing_fwhm
     <Quantity 0. arcsec>
     """
-    inst = resolve_instrument(instrument)
+    inst = instruments.get(instrument)
     if not isinstance(seeing, (bool, np.bool_)):
         raise TypeError(f"seeing must be True or False, got {seeing!r}")
     return inst if seeing else inst.replace(seeing_fwhm=0 * u.arcsec)

@@ -24,8 +24,7 @@ import astropy.units as u
 import numpy as np
 from astropy.io import fits
 
-from gongsynth.instrument import resolve_instrument
-from gongsynth.planes import N_PLANES
+from gongsynth import instruments
 from gongsynth.seeding import stage_generator
 from gongsynth.validation import check_finite, check_quantity
 
@@ -107,7 +106,7 @@ def synthetic_flat(shape=None, *, instrument=None, seed=None, tilt=None, vignett
     >>> bool(0.005 < np.std(f - np.roll(f, 1, axis=1)) / np.sqrt(2) < 0.02)
     True
     """
-    inst = resolve_instrument(instrument)
+    inst = instruments.get(instrument)
     ny, nx = _detector_shape(shape, inst)
     seed = inst.detector_map_seed if seed is None else seed
     tilt = _number(tilt, inst.flat_tilt, u.one)
@@ -197,7 +196,7 @@ def synthetic_dark(shape=None, *, instrument=None, level=None, seed=None, glow=N
     >>> d.unit, d.shape, bool(10 <= float(np.median(d.value)) < 12)
     (Unit("electron"), (32, 32), True)
     """
-    inst = resolve_instrument(instrument)
+    inst = instruments.get(instrument)
     ny, nx = _detector_shape(shape, inst)
     level = inst.dark_level if level is None else level
     seed = inst.detector_map_seed if seed is None else seed
@@ -295,7 +294,7 @@ def read_dark(path, unit=None):
     return check_quantity(data * u.Unit(unit), u.electron, "dark").to(u.electron)
 
 
-def normalise_flat(flat, shape):
+def normalise_flat(flat, shape, n_planes=6):
     """
     Check a flat field and normalise each plane by its median.
 
@@ -303,9 +302,11 @@ def normalise_flat(flat, shape):
     ----------
     flat : array_like, dimensionless `~astropy.units.Quantity`, str or path-like
         Multiplicative gain map, shape (ny, nx) (the same for all planes) or
-        (6, ny, nx); a path is read with `read_flat`.
+        (n_planes, ny, nx); a path is read with `read_flat`.
     shape : tuple of int
         (ny, nx) of the detector.
+    n_planes : int
+        The instrument's number of raw planes K (GONG's 6 by default).
 
     Returns
     -------
@@ -332,16 +333,16 @@ def normalise_flat(flat, shape):
             raise u.UnitsError(f"flat must be dimensionless, got unit {flat.unit}")
         flat = flat.to_value(u.one)
     flat = np.asarray(flat, dtype=np.float64)
-    if flat.shape not in ((ny, nx), (N_PLANES, ny, nx)):
-        raise ValueError(f"flat must have shape {(ny, nx)} or {(N_PLANES, ny, nx)}, got {flat.shape}")
+    if flat.shape not in ((ny, nx), (n_planes, ny, nx)):
+        raise ValueError(f"flat must have shape {(ny, nx)} or {(n_planes, ny, nx)}, got {flat.shape}")
     check_finite(flat, "flat")
     bad = int(np.count_nonzero(flat <= 0))
     if bad:
         raise ValueError(f"flat must be strictly positive (it multiplies the signal and is "
                          f"divided out in the reduction); it has {bad} zero or negative pixel(s)")
     if flat.ndim == 2:
-        return np.broadcast_to(flat / np.median(flat), (N_PLANES, ny, nx))
-    return flat / np.median(flat.reshape(N_PLANES, -1), axis=1)[:, None, None]
+        return np.broadcast_to(flat / np.median(flat), (n_planes, ny, nx))
+    return flat / np.median(flat.reshape(n_planes, -1), axis=1)[:, None, None]
 
 
 def prepare_dark(dark, shape):

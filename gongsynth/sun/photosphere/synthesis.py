@@ -25,7 +25,7 @@ import numpy as np
 from scipy.special import wofz
 
 from gongsynth.geometry import check_geometry, los_basis
-from gongsynth.instrument import GONGInstrument
+from gongsynth.instruments.gong.parameters import GONGInstrument
 from gongsynth.sun.photosphere._kernel import me_kernel, me_project_kernel, voigt_table
 from gongsynth.sun.photosphere.columns import Photosphere
 from gongsynth.sun.photosphere.line import NiLine
