@@ -25,7 +25,10 @@ HMI: 12 planes, k = polarisation × 6 + tuning, polarisation 0 = LCP = I+V.
 
 The camera asks for a `FrameSchedule` (which plane each frame is added to,
 the dither it carries), the reduction for the instrument's algorithm
-(`Instrument.observables`) after the shared dark and flat correction.
+(`Instrument.algorithm`) after the shared dark and flat correction.  The
+algorithm is named by ``"module:function"`` and imported by the reduction
+stage: it may live at the reduction's place in the data flow (it returns the
+stage's `Observables`) while the instrument's parameters sit early.
 
 The parameters
 --------------
@@ -50,9 +53,10 @@ import numpy as np
 import tomlkit
 
 from gongsynth.tomlfmt import toml_table
+from gongsynth.validation import check_finite, check_quantity
 
 __all__ = ["Instrument", "InstrumentParameters", "FrameSchedule", "Observables", "quantity_field",
-           "plain_field", "field_unit"]
+           "plain_field", "field_unit", "whole_frames"]
 
 # Field metadata keys.
 _UNIT = "unit"
@@ -148,8 +152,11 @@ class Instrument(Protocol):
         ValueError naming ``duration`` when the duration is not a whole
         number of the instrument's frames.
     Reduction
-        ``observables(planes, **options)`` → `Observables` from the dark-
-        and flat-corrected planes (K, ...); ``gauss_per_velocity`` (G per m/s);
+        ``algorithm``: ``"package.module:function"`` of
+        ``function(planes, instrument, **options)`` → `Observables` from the
+        dark- and flat-corrected planes (K, ...) (GONG:
+        ``"gongsynth.instruments.gong.reduction:three_phase"``; HMI:
+        ``reduce_hmi``); ``gauss_per_velocity`` (G per m/s);
         ``header_cards()`` → dict of FITS cards (≤ 8 characters: ``(value,
         comment)``) that record the instrument's own inversion constants in
         every product.
@@ -175,6 +182,7 @@ class Instrument(Protocol):
     truncate_bits: int
     analysers: tuple
     plane_names: tuple
+    algorithm: str
     gauss_per_velocity: u.Quantity
 
     def responses(self, wavelength):
@@ -182,9 +190,6 @@ class Instrument(Protocol):
 
     def schedule(self, duration):
         """The `FrameSchedule` of an observation of ``duration``."""
-
-    def observables(self, planes, **options):
-        """The instrument's algorithm: corrected planes (K, ...) → `Observables`."""
 
     def header_cards(self):
         """FITS cards of the instrument's inversion constants."""
@@ -422,6 +427,47 @@ def _as_quantity(cls, name, value, unit):
     return value
 
 
+def whole_frames(duration, cadence):
+    """
+    The number of frames in ``duration`` at one frame per ``cadence``, checked.
+
+    Parameters
+    ----------
+    duration, cadence : `~astropy.units.Quantity`
+        Times.
+
+    Returns
+    -------
+    int
+
+    Raises
+    ------
+    TypeError, astropy.units.UnitsError
+        If ``duration`` is not a time Quantity.
+    ValueError
+        Naming ``duration`` if it is not a finite positive scalar holding a
+        whole number of frames.
+
+    Examples
+    --------
+    >>> import astropy.units as u
+    >>> whole_frames(45 * u.s, 3.75 * u.s)
+    12
+    """
+    check_quantity(duration, u.s, "duration")
+    if np.ndim(duration) != 0:
+        raise ValueError(f"duration must be a scalar, got shape {np.shape(duration)}")
+    check_finite(duration, "duration")
+    if duration <= 0 * u.s:
+        raise ValueError(f"duration must be positive, got {duration}")
+    frames = (duration / cadence).to_value(u.one)
+    n = int(round(frames))
+    if abs(frames - n) > 1e-6 * max(1.0, abs(frames)) or n < 1:
+        raise ValueError(f"duration must hold a whole number of frames of {cadence}, got {duration} "
+                         f"({frames:g} frames)")
+    return n
+
+
 @dataclass(frozen=True, eq=False)
 class FrameSchedule:
     """
@@ -475,6 +521,43 @@ class FrameSchedule:
     def mean_dither(self):
         """Mean dither per frame of each plane, `~astropy.units.Quantity` (n_planes,) in adu."""
         return (self.dither_sum / np.maximum(self.frames_per_plane, 1)) * u.adu
+
+    @classmethod
+    def regular(cls, duration, cadence, n_planes):
+        """
+        Frames every ``cadence`` cycling through the planes in order, without dither.
+
+        The schedule of an instrument that takes one filtergram of each plane
+        in turn (HMI: 12 filtergrams, one every 3.75 s, per 45-s sequence).
+
+        Parameters
+        ----------
+        duration : `~astropy.units.Quantity`
+            Observation length: a whole number of frames (time).
+        cadence : `~astropy.units.Quantity`
+            Time from one frame to the next (time).
+        n_planes : int
+
+        Returns
+        -------
+        `FrameSchedule`
+
+        Raises
+        ------
+        ValueError
+            Naming ``duration`` when it is not a positive whole number of frames.
+
+        Examples
+        --------
+        >>> import astropy.units as u
+        >>> s = FrameSchedule.regular(45 * u.s, 3.75 * u.s, 12)
+        >>> s.n_frames, s.frames_per_plane.tolist()[:3], float(s.time[-1].value)
+        (12, [1, 1, 1], 41.25)
+        """
+        n = whole_frames(duration, cadence)
+        k = np.arange(n, dtype=np.int64)
+        return cls(time=(k * cadence).to(u.s), plane=k % n_planes, dither=np.zeros(n, dtype=np.int64) * u.adu,
+                   n_planes=int(n_planes), duration=(n * cadence).to(u.s))
 
     def header_cards(self):
         """

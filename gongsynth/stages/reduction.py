@@ -6,10 +6,11 @@ Shared by every instrument (the paper's Sec. 3.3 steps 1-2):
 1. subtract the dark, scaled by the number of frames in each plane;
 2. divide by the flat (normalised by its median);
 
-then the instrument's own algorithm (`~gongsynth.instruments.base.Instrument.observables`):
+then the instrument's own algorithm (`~gongsynth.instruments.base.Instrument.algorithm`):
 GONG's three-phase √3 arctan (`gongsynth.instruments.gong.reduction`), HMI's
 Fourier coefficients and look-up tables.
 """
+import importlib
 import os
 
 import astropy.units as u
@@ -20,7 +21,7 @@ from gongsynth.instruments.base import Observables
 from gongsynth.stages.camera.detector import normalise_flat, read_dark
 from gongsynth.validation import check_finite, check_quantity
 
-__all__ = ["Observables", "reduce", "subtract_dark", "divide_flat"]
+__all__ = ["Observables", "reduce", "algorithm", "subtract_dark", "divide_flat"]
 
 # GONG's algorithm moved to its instrument; its old path here still resolves.
 _MOVED = {"measured_phase", "phase_to_velocity", "reference_phase"}
@@ -135,7 +136,7 @@ def reduce(raw, instrument=None, dark=None, flat=None, *, frames_per_plane=None,
         (including none: a single pixel).
     instrument : instrument or str, optional
         Supplies the gain and truncation (dark subtraction) and the algorithm
-        (`~gongsynth.instruments.base.Instrument.observables`; GONG's: v0, the
+        (`~gongsynth.instruments.base.Instrument.algorithm`; GONG's: v0, the
         Landé factor, the wrap margin and the filter model that fixes the
         velocity zero point).  Default GONG.
     dark : None, bool, `~astropy.units.Quantity`, str or path-like
@@ -196,4 +197,27 @@ def reduce(raw, instrument=None, dark=None, flat=None, *, frames_per_plane=None,
     if flat is not None and flat is not False:
         planes = divide_flat(planes, flat)
 
-    return inst.observables(planes, **options)
+    return algorithm(inst)(planes, inst, **options)
+
+
+def algorithm(instrument):
+    """
+    The instrument's reduction algorithm, imported from where its ``algorithm`` names it.
+
+    Parameters
+    ----------
+    instrument : instrument
+
+    Returns
+    -------
+    callable
+        ``f(planes, instrument, **options)`` → `Observables`.
+
+    Examples
+    --------
+    >>> from gongsynth import instruments
+    >>> algorithm(instruments.get("gong")).__name__
+    'three_phase'
+    """
+    module, _, name = instrument.algorithm.partition(":")
+    return getattr(importlib.import_module(module), name)

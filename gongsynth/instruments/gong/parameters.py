@@ -243,6 +243,8 @@ class GONGInstrument(InstrumentParameters):
     name: ClassVar[str] = "gong"
     label: ClassVar[str] = "GONG"
     line: ClassVar[str] = "Ni I 676.8"
+    #: GONG's reduction algorithm (`gongsynth.instruments.gong.reduction.three_phase`).
+    algorithm: ClassVar[str] = "gongsynth.instruments.gong.reduction:three_phase"
 
     def __post_init__(self):
         super().__post_init__()
@@ -355,24 +357,6 @@ class GONGInstrument(InstrumentParameters):
         """
         from gongsynth.instruments.gong.schedule import frame_schedule
         return frame_schedule(duration, self)
-
-    def observables(self, planes, **options):
-        """
-        GONG's three-phase reduction (`gongsynth.instruments.gong.reduction.three_phase`).
-
-        Parameters
-        ----------
-        planes : `numpy.ndarray`
-            (6, ...) dark- and flat-corrected planes.
-        **options
-            ``wrap_margin``.
-
-        Returns
-        -------
-        `~gongsynth.instruments.base.Observables`
-        """
-        from gongsynth.instruments.gong.reduction import three_phase
-        return three_phase(planes, self, **options)
 
     def header_cards(self):
         """

@@ -22,10 +22,9 @@ from dataclasses import dataclass
 import astropy.units as u
 import numpy as np
 
-from gongsynth.instruments.base import FrameSchedule
+from gongsynth.instruments.base import FrameSchedule, whole_frames
 from gongsynth.instruments.gong.parameters import GONGInstrument, resolve_instrument
 from gongsynth.instruments.gong.planes import N_CHANNELS, N_PLANES, N_POLARISATIONS
-from gongsynth.validation import check_finite, check_quantity
 
 __all__ = ["FrameSchedule", "GONGFrameSchedule", "frame_schedule", "dither_sequence", "n_frames_in"]
 
@@ -59,14 +58,7 @@ def n_frames_in(duration, instrument=None):
     36000
     """
     inst = resolve_instrument(instrument)
-    check_quantity(duration, u.s, "duration")
-    if np.ndim(duration) != 0:
-        raise ValueError(f"duration must be a scalar, got shape {np.shape(duration)}")
-    check_finite(duration, "duration")
-    if duration <= 0 * u.s:
-        raise ValueError(f"duration must be positive, got {duration}")
-    return _whole((duration * inst.frame_rate).to_value(u.one),
-                  f"duration × frame_rate ({duration} × {inst.frame_rate})")
+    return whole_frames(duration, (1 / inst.frame_rate).to(u.s))
 
 
 def dither_sequence(n_frames, instrument=None):
