@@ -34,7 +34,8 @@ import astropy.units as u
 import numpy as np
 from sunpy import log
 
-from gongsynth.geometry import Pointing, disk_geometry
+from gongsynth import instruments
+from gongsynth.geometry import Pointing, as_obstime, disk_geometry
 from gongsynth.observing import site_location
 from gongsynth.products.maps import PRODUCTS, make_product_map
 from gongsynth.seeding import child_sequence
@@ -52,7 +53,7 @@ from gongsynth.sun.sampling import check_spectral_sampling
 from gongsynth.suns import SUNS
 
 __all__ = ["Stage", "Chain", "build_chain", "interactive", "run_header", "unmeasured", "large_scale_field",
-           "SKY_FRACTION"]
+           "line_of", "DEFAULT_RT_LINE", "SKY_FRACTION"]
 
 #: A pixel whose light is below this fraction of the brightest pixel's is too
 #: faint for a phase: every product is blanked there (see `unmeasured`).
@@ -218,12 +219,13 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
     `Chain`
     """
     progress = progress and interactive()
-    inst = config.instrument
+    # Resolved once for every stage: the instrument object and the pointing with its Time.
+    inst = instruments.get(config.instrument)
+    pointing = Pointing(config.latitude, config.obstime)
     effects = config.effects
     for name, given in (("flat", flat), ("dark", dark)):
         if given is not None and given is not True and not getattr(effects, name):
             raise ValueError(f"a user {name} was given but effects.{name} is off: give one or the other")
-    pointing = Pointing(config.latitude, config.obstime)
     stages = Chain()
 
     if stokes is None and config.mode == "full-disk":
@@ -253,8 +255,9 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
     if config.mode == "full-disk":
         def disk_scene(photosphere):
             light, truth = full_disk_scene(photosphere, detector_shape=config.detector_pixels,
-                                           obstime=config.obstime, instrument=inst, progress=progress,
-                                           surface_field=large_scale_field(config, surface_field),
+                                           obstime=pointing.obstime, instrument=inst, progress=progress,
+                                           surface_field=large_scale_field(config, surface_field,
+                                                                           obstime=pointing.obstime),
                                            seed=child_sequence(config.seed, "scene"),
                                            site=site_location(config.site), pointing=config.pointing)
             return {"light": light, "truth_scene": truth}
@@ -266,7 +269,7 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
         if stokes is None and config.sun == "model-atmosphere":
             def atmosphere_transfer(photosphere):
                 return {"stokes": rt_synthesize(photosphere, mu=pointing.mu, azimuth=pointing.los_azimuth,
-                                                progress=progress)}
+                                                progress=progress, **line_of(inst))}
 
             stages.append(Stage("synthesis", ("photosphere",), ("stokes",), atmosphere_transfer,
                                 "LTE Stokes radiative transfer of the model atmosphere at the pointing's mu"))
@@ -281,7 +284,7 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
         elif isinstance(stokes, Atmosphere):
             def radiative_transfer():
                 return {"stokes": rt_synthesize(stokes, mu=pointing.mu, azimuth=pointing.los_azimuth,
-                                                progress=progress)}
+                                                progress=progress, **line_of(inst))}
 
             stages.append(Stage("synthesis", (), ("stokes",), radiative_transfer,
                                 "LTE Stokes radiative transfer of the atmosphere at the pointing's mu"))
@@ -324,7 +327,8 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
                                  workers=config.workers, progress=progress)}
 
     def reduction(raw, expected_counts):
-        return {"observables": reduce(raw, inst), "sky": unmeasured(expected_counts, config)}
+        return {"observables": reduce(raw, inst),
+                "sky": unmeasured(expected_counts, config, instrument=inst, obstime=pointing.obstime)}
 
     def maps(observables, sky, truth, truth_psf, light):
         made = {"magnetogram": observables.magnetogram, "doppler": observables.doppler,
@@ -351,7 +355,29 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
     return stages
 
 
-def large_scale_field(config, given=None):
+def line_of(instrument):
+    """
+    The `gongsynth.rt.synthesize` keyword that selects the instrument's line.
+
+    Parameters
+    ----------
+    instrument : instrument
+
+    Returns
+    -------
+    dict
+        ``{}`` for the radiative transfer's default line, Ni I 676.8 nm (so a
+        GONG run calls it exactly as before), else ``{"line": instrument.line}``
+        (the key of its line registry).
+    """
+    return {} if instrument.line == DEFAULT_RT_LINE else {"line": instrument.line}
+
+
+#: The radiative transfer's default line (its line registry's key).
+DEFAULT_RT_LINE = "Ni I 676.8"
+
+
+def large_scale_field(config, given=None, *, obstime=None):
     """
     The surface field a full-disk run follows (`gongsynth.sun.surface_field`).
 
@@ -364,6 +390,8 @@ def large_scale_field(config, given=None):
         A map: a gongsynth surface field is used as it is; any other map (a
         full-disk magnetogram, a synoptic map) goes through
         `~gongsynth.sun.surface_field.surface_field_from_map` at the run's date.
+    obstime : `~astropy.time.Time`, optional
+        The run's date, resolved (default: ``config.obstime``).
 
     Returns
     -------
@@ -372,18 +400,19 @@ def large_scale_field(config, given=None):
     """
     from gongsynth.sun.surface_field import surface_field_from_map, synthetic_surface_field
     from gongsynth.sun.surface_field.maps import check_surface_field
+    time = as_obstime(config.obstime if obstime is None else obstime)
     if given is None:
         if config.surface_field == "synthetic":
-            return synthetic_surface_field(config.obstime, seed=child_sequence(config.seed, "surface-field"))
+            return synthetic_surface_field(time, seed=child_sequence(config.seed, "surface-field"))
         return None
     try:
         check_surface_field(given)
         return given
     except ValueError:
-        return surface_field_from_map(given, config.obstime)
+        return surface_field_from_map(given, time)
 
 
-def unmeasured(expected_counts, config):
+def unmeasured(expected_counts, config, *, instrument=None, obstime=None):
     """
     Detector pixels where the line is not measured, to be blanked in every product.
 
@@ -404,6 +433,10 @@ def unmeasured(expected_counts, config):
     expected_counts : `~astropy.units.Quantity`
         (K, ny, nx) expected electrons per frame.
     config : `~gongsynth.config.SimulationConfig`
+    instrument : instrument, optional
+        The run's, resolved (default: ``config.instrument``).
+    obstime : `~astropy.time.Time`, optional
+        The run's date, resolved (default: ``config.obstime``).
 
     Returns
     -------
@@ -414,7 +447,9 @@ def unmeasured(expected_counts, config):
     faint = light < SKY_FRACTION * light.max()
     if config.mode != "full-disk":
         return faint
-    off_disk = ~disk_geometry(light.shape, config.instrument.plate_scale, obstime=config.obstime,
+    inst = instruments.get(config.instrument if instrument is None else instrument)
+    off_disk = ~disk_geometry(light.shape, inst.plate_scale,
+                              obstime=config.obstime if obstime is None else obstime,
                               pointing=config.pointing).on_disk
     return faint | off_disk
 

@@ -19,9 +19,9 @@ import numpy as np
 import tomlkit
 from astropy.time import Time
 
+from gongsynth import instruments
 from gongsynth.geometry import DEFAULT_OBSTIME as _DEFAULT_TIME
 from gongsynth.geometry import Pointing
-from gongsynth.instruments.gong.parameters import GONGInstrument
 from gongsynth.observing import GONG_SITES, check_site, like_gong
 from gongsynth.seeding import root_seed
 from gongsynth.stages.camera.integrate import ENGINES
@@ -275,8 +275,10 @@ class SimulationConfig:
         Full-disk mode: helioprojective (Tx, Ty) of the detector's centre
         (default (0, 0): the Sun's centre on the detector's centre; a real
         GONG image is off centre by up to a few tens of arcsec).
-    instrument : `~gongsynth.GONGInstrument`
-        The instrument.
+    instrument : instrument or str
+        The instrument: an object of the family (`gongsynth.instruments`) or
+        its name (``"gong"``, the default), stored as the object.  TOML:
+        ``[instrument]`` with ``name`` and every parameter.
 
     Examples
     --------
@@ -310,7 +312,7 @@ class SimulationConfig:
     site: str | None = None
     like: str | None = None
     pointing: tuple = (0 * u.arcsec, 0 * u.arcsec)
-    instrument: GONGInstrument = field(default_factory=GONGInstrument)
+    instrument: object = field(default_factory=instruments.get)
 
     def __post_init__(self):
         if self.sun is None and self.mode in MODES:
@@ -322,6 +324,7 @@ class SimulationConfig:
         if self.photosphere_pixel_size is None:
             object.__setattr__(self, "photosphere_pixel_size", run_grid_default(self.sun, "pixel_size"))
         object.__setattr__(self, "pointing", _pointing(self.pointing, self.mode))
+        object.__setattr__(self, "instrument", instruments.get(self.instrument))  # a name, or the object
         for name, (unit, _) in _QUANTITIES.items():
             value = getattr(self, name)
             value = value if name != "pointing" else u.Quantity(value)
@@ -354,8 +357,6 @@ class SimulationConfig:
             if not _is_int(self.workers) or self.workers < 1:
                 raise ValueError(f"workers must be a positive int or None, got {self.workers!r}")
             object.__setattr__(self, "workers", int(self.workers))
-        if not isinstance(self.instrument, GONGInstrument):
-            raise TypeError(f"instrument must be a GONGInstrument, got {type(self.instrument).__name__}")
         if not isinstance(self.effects, Effects):
             raise TypeError(f"effects must be an Effects, got {type(self.effects).__name__}")
         object.__setattr__(self, "photosphere", _photosphere_knobs(dict(self.photosphere), self.sun))
@@ -384,7 +385,8 @@ class SimulationConfig:
         Parameters
         ----------
         seed : None, int, `numpy.random.SeedSequence` or `numpy.random.Generator`
-        instrument : `~gongsynth.GONGInstrument`, optional
+        instrument : instrument or str, optional
+            An instrument of the family or its name (default GONG).
         **kwargs
             The other fields.
 
@@ -393,7 +395,7 @@ class SimulationConfig:
         `SimulationConfig`
         """
         seed = root_seed(seed)
-        instrument = GONGInstrument() if instrument is None else instrument
+        instrument = instruments.get(instrument)
         if isinstance(kwargs.get("obstime"), Time):
             kwargs["obstime"] = kwargs["obstime"].isot
         return cls(seed=seed, instrument=instrument, **kwargs)
@@ -547,7 +549,7 @@ class SimulationConfig:
         for name in ("resolutions", "photosphere_shape"):
             if name in sim:
                 sim[name] = tuple(sim[name])
-        instrument = GONGInstrument.from_dict(table.get("instrument", {}))
+        instrument = instruments.from_dict(table.get("instrument", {}))
         if sim.get("like") is not None:
             sim, instrument = like_gong(sim["like"], settings=sim, instrument=instrument,
                                         mode=sim.get("mode", cls.mode),

@@ -123,7 +123,7 @@ def check_spectral_sampling(wavelength, instrument=None, *, max_field=MAX_FIELD,
                                                                  max_velocity=max_velocity))
     lam0 = inst.line_wavelength.to_value(u.nm)
     lo, hi = lam0 - half, lam0 + half
-    need = (f"the GONG channel integrals need {lo:.5f}-{hi:.5f} nm (the line at {lam0:.4f} nm ± "
+    need = (f"the {inst.label} channel integrals need {lo:.5f}-{hi:.5f} nm (the line at {lam0:.4f} nm ± "
             f"{half * 1e3:.1f} pm: two line widths, the Zeeman shift of {max_field.to_value(u.G):g} G "
             f"and the Doppler shift of {max_velocity.to_value(u.km / u.s):g} km/s) sampled every "
             f"{step * 1e3:.1f} pm or finer, e.g. the paper's 51 points over 676.73-676.83 nm")
