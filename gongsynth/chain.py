@@ -361,7 +361,7 @@ def line_of(instrument):
 
     Parameters
     ----------
-    instrument : instrument
+    instrument : `~gongsynth.instruments.base.Instrument`
 
     Returns
     -------
@@ -433,7 +433,7 @@ def unmeasured(expected_counts, config, *, instrument=None, obstime=None):
     expected_counts : `~astropy.units.Quantity`
         (K, ny, nx) expected electrons per frame.
     config : `~gongsynth.config.SimulationConfig`
-    instrument : instrument, optional
+    instrument : `~gongsynth.instruments.base.Instrument`, optional
         The run's, resolved (default: ``config.instrument``).
     obstime : `~astropy.time.Time`, optional
         The run's date, resolved (default: ``config.obstime``).

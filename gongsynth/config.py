@@ -275,7 +275,7 @@ class SimulationConfig:
         Full-disk mode: helioprojective (Tx, Ty) of the detector's centre
         (default (0, 0): the Sun's centre on the detector's centre; a real
         GONG image is off centre by up to a few tens of arcsec).
-    instrument : instrument or str
+    instrument : `~gongsynth.instruments.base.Instrument` or str
         The instrument: an object of the family (`gongsynth.instruments`) or
         its name (``"gong"``, the default), stored as the object.  TOML:
         ``[instrument]`` with ``name`` and every parameter.
@@ -385,7 +385,7 @@ class SimulationConfig:
         Parameters
         ----------
         seed : None, int, `numpy.random.SeedSequence` or `numpy.random.Generator`
-        instrument : instrument or str, optional
+        instrument : `~gongsynth.instruments.base.Instrument` or str, optional
             An instrument of the family or its name (default GONG).
         **kwargs
             The other fields.

@@ -97,7 +97,7 @@ def get(instrument=None):
 
     Returns
     -------
-    instrument
+    `~gongsynth.instruments.base.Instrument`
         The default parameters of the named instrument, or ``instrument``.
 
     Raises
@@ -143,7 +143,7 @@ def from_dict(table, *, where="instrument"):
 
     Returns
     -------
-    instrument
+    `~gongsynth.instruments.base.Instrument`
     """
     table = dict(table)
     name = table.pop("name", DEFAULT)

@@ -32,7 +32,7 @@ def filter_quadrature(inst):
 
     Parameters
     ----------
-    inst : instrument
+    inst : `~gongsynth.instruments.base.Instrument`
         Any instrument of the family (hashable).
 
     Returns
@@ -93,7 +93,7 @@ def channel_weights(wavelength: u.nm, instrument=None):
     wavelength : `~astropy.units.Quantity`
         Strictly increasing wavelengths, shape (nλ,), nλ ≥ 2, that must contain
         the line centre.
-    instrument : instrument or str, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
         Any instrument of the family (default GONG, whose three sector
         responses give a (3, nλ) result).
 

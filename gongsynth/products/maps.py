@@ -44,7 +44,7 @@ def simulated_telescope(instrument):
 
     Parameters
     ----------
-    instrument : instrument
+    instrument : `~gongsynth.instruments.base.Instrument`
 
     Returns
     -------
@@ -74,7 +74,7 @@ def product_header(shape, *, centre, scale, product, instrument=None, duration=N
         Pixel size (angle per pixel).
     product : str
         One of `PRODUCTS`.
-    instrument : instrument or str, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
         Supplies the telescope and detector names, the line wavelength
         (WAVELNTH) and the frame exposure (default GONG).
     duration : `~astropy.units.Quantity`, optional

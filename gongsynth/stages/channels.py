@@ -176,7 +176,7 @@ def channel_images(stokes, *, mueller=None, instrument=None):
         Dimensionless instrument Mueller matrix applied before the I±V
         analysis: (4, 4), per wavelength (nλ, 4, 4) or per pixel (ny, nx, 4, 4).
         Default: identity (the paper's no-cross-talk I+V and I−V).
-    instrument : instrument or str, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
         Its filtergrams (`gongsynth.instruments.quadrature.channel_weights`)
         and ``analysers`` (filtergram and sign of V of each plane).  Default GONG.
 

@@ -10,7 +10,7 @@ Pixelization follows the paper: bilinear resampling to exactly
 ``supersampling`` × the detector pixels, then ``supersampling`` ×
 ``supersampling`` binning.  Both steps are linear and separable, so they are
 applied as one sparse matrix per axis.  All functions work on any stack
-``(..., ny, nx)``: the six channel planes, or the true B_LOS pushed through the
+``(..., ny, nx)``: the instrument's K planes, or the true B_LOS pushed through the
 same geometry.
 """
 import functools
@@ -246,7 +246,7 @@ def pixelize(stack, pixel_scale: u.arcsec, *, instrument=None, periodic=False, m
         Sampling of ``stack`` on the sky (arcsec per pixel).  The field,
         ``ny * pixel_scale`` by ``nx * pixel_scale``, must be a whole number of
         detector pixels.
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
         Supplies ``plate_scale`` and ``supersampling``.
     periodic : bool
         Interpolate across the edges with wrap-around (periodic scenes) rather
@@ -337,7 +337,7 @@ def observe(stack, pixel_scale: u.arcsec, *, instrument=None, psf=True, seeing=T
         Shape ``(..., ny, nx)`` sampled at ``pixel_scale``; unit kept.
     pixel_scale : `~astropy.units.Quantity`
         Sampling of ``stack`` (arcsec per pixel).
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
     psf : bool, None or array_like
         ``True`` (default; ``None`` is the same): the instrument PSF
         (`psf_kernel`); ``False``: no PSF at all (pixel average only, e.g. for
@@ -414,7 +414,7 @@ def photometric_factor(instrument=None):
 
     Parameters
     ----------
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
 
     Returns
     -------
@@ -437,7 +437,7 @@ def photometric_factor(instrument=None):
 
 def expected_counts(scene, instrument=None, *, psf=True, seeing=True, workers=None, band_limited=True):
     """
-    Expected electrons per frame in each detector pixel for the six planes.
+    Expected electrons per frame in each detector pixel for the instrument's K planes.
 
     PSF (with the scene's boundary handling), pixelization, then photometry
     (`photometric_factor`).
@@ -446,7 +446,7 @@ def expected_counts(scene, instrument=None, *, psf=True, seeing=True, workers=No
     ----------
     scene : `~gongsynth.stages.scene.scene.Scene`
         Radiance at Earth per arcsec², ``(6, NY, NX)`` (any leading length works).
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
         Defaults to the instrument the scene was built with.
     psf : bool, None or array_like
         As in `observe`: ``True`` (default) the instrument PSF, ``False`` none,
@@ -510,7 +510,7 @@ def image_scene(light, truth=None, instrument=None, *, psf=True, seeing=True, wo
         Radiance at Earth per arcsec² (6, NY, NX).
     truth : `~gongsynth.stages.scene.scene.Scene`, optional
         A map (NY, NX) on the same grid (e.g. B_LOS in G).
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
         Defaults to the light scene's.
     psf, seeing : optional
         As in `observe`.

@@ -62,7 +62,7 @@ def subtract_dark(planes, dark, frames_per_plane, instrument=None):
         Dark current in electron (per frame), shape ``planes.shape[1:]`` or scalar.
     frames_per_plane : array_like of int
         Frames accumulated in each plane, shape (K,).
-    instrument : instrument or str, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
         Supplies the gain and ``truncate_bits`` (default GONG).
 
     Returns
@@ -134,7 +134,7 @@ def reduce(raw, instrument=None, dark=None, flat=None, *, frames_per_plane=None,
         The planes, shape (K, ...) in DN, in the instrument's plane order
         (GONG: six, as in `gongsynth.planes`).  Any spatial shape works
         (including none: a single pixel).
-    instrument : instrument or str, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
         Supplies the gain and truncation (dark subtraction) and the algorithm
         (`~gongsynth.instruments.base.Instrument.algorithm`; GONG's: v0, the
         Landé factor, the wrap margin and the filter model that fixes the
@@ -206,7 +206,7 @@ def algorithm(instrument):
 
     Parameters
     ----------
-    instrument : instrument
+    instrument : `~gongsynth.instruments.base.Instrument`
 
     Returns
     -------

@@ -310,12 +310,10 @@ class GONGInstrument(InstrumentParameters):
     @property
     def analysers(self):
         """
-        (sector, sign of V) of each raw plane: plane = polarisation × 3 + sector (`gongsynth.planes`).
+        The (sector, sign of Stokes V) pair of each raw plane, a tuple of int pairs.
 
-        Returns
-        -------
-        tuple of (int, int)
-            ``((0, 1), (1, 1), (2, 1), (0, -1), (1, -1), (2, -1))``.
+        Plane = polarisation × 3 + sector (`gongsynth.planes`), I+V first:
+        ``((0, 1), (1, 1), (2, 1), (0, -1), (1, -1), (2, -1))``.
         """
         from gongsynth.instruments.gong.planes import ANALYSERS
         return ANALYSERS
@@ -379,7 +377,7 @@ def resolve_instrument(instrument):
 
     Parameters
     ----------
-    instrument : instrument, str or None
+    instrument : `~gongsynth.instruments.base.Instrument`, str or None
 
     Returns
     -------

@@ -72,7 +72,7 @@ def synthetic_flat(shape=None, *, instrument=None, seed=None, tilt=None, vignett
     ----------
     shape : tuple of int, optional
         (ny, nx) in pixels; default the instrument's ``detector_shape`` square.
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
         Supplies the defaults below.
     seed : seed-like, optional
         Seed of the dust positions, gradient direction and PRNU
@@ -167,7 +167,7 @@ def synthetic_dark(shape=None, *, instrument=None, level=None, seed=None, glow=N
     ----------
     shape : tuple of int, optional
         (ny, nx) in pixels; default the instrument's ``detector_shape`` square.
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
         Supplies the defaults below.
     level : `~astropy.units.Quantity`, optional
         Typical dark current per frame, electron (``dark_level``, 30 e⁻ ≈ 0.9

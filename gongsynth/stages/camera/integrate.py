@@ -283,7 +283,7 @@ def integrate(expected, *, duration=10 * u.min, engine="blocks", seed=None, inst
         equivalent); ``"frames"`` simulates every frame.  See `ENGINES`.
     seed : None, int, `numpy.random.SeedSequence` or `numpy.random.Generator`
         Root seed; its entropy is written to the header.
-    instrument : instrument or str, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
         Supplies the schedule (`~gongsynth.instruments.base.Instrument.schedule`:
         planes and dither), gain, read noise, truncation and the synthetic flat
         and dark.  Default GONG.

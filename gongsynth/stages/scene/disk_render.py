@@ -52,7 +52,7 @@ def library_scene(library, *, obstime=None, instrument=None, detector_shape=None
     library : `~gongsynth.stages.scene.library.PatchLibrary`
     obstime : `~astropy.time.Time` or str, optional
         Observer at Earth; default `gongsynth.geometry.DEFAULT_OBSTIME`.
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
         Must be the one the library was built with (its filters are in the
         Doppler basis).
     detector_shape : int or (int, int), optional

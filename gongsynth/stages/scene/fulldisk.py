@@ -136,7 +136,7 @@ def full_disk_scene(source, *, obstime=None, instrument=None, detector_shape=Non
         beyond the cubes' μ range take the nearest cube, with a warning).
     obstime : `~astropy.time.Time` or str, optional
         Observer at Earth; default `gongsynth.geometry.DEFAULT_OBSTIME` (B0 ≈ 0).
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
     detector_shape : int or (int, int), optional
         Detector pixels; default ``instrument.detector_shape`` (860, GONG's field).
     supersampling : int, optional

@@ -249,7 +249,7 @@ def build_library(*, seed=0, shape=(256, 256), pixel_size=384 * u.km, seeds_per_
         matrix that mixes Q or U into the analyser states sees them turned by
         the sample's position angle (I and V, all the identity uses, are not
         affected).
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
     line : `~gongsynth.sun.photosphere.NiLine`, optional
     max_velocity : `~astropy.units.Quantity`, optional
         Largest Doppler shift the scene may apply (see `gongsynth.stages.scene.shifts.shift_basis`).

@@ -163,7 +163,7 @@ class Scene:
         Helioprojective WCS of the grid (`wcs_header`).
     boundary : {"periodic", "zero", "reflect"}
         Edge handling for the PSF (`gongsynth.stages.optics.convolve`).
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
     detector_shape : (int, int), optional
         The detector grid that covers the same field; default: the field
         divided by ``instrument.plate_scale``.
@@ -259,7 +259,7 @@ class Scene:
 
         Parameters
         ----------
-        instrument : `~gongsynth.GONGInstrument`, optional
+        instrument : `~gongsynth.instruments.base.Instrument` or str, optional
             Unused (the scene knows its detector grid); accepted for symmetry.
 
         Returns
@@ -369,7 +369,7 @@ def sky_grid(instrument=None, *, detector_shape=None, shape=None):
 
     Parameters
     ----------
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
     detector_shape : int or (int, int), optional
         Detector pixels; default ``instrument.detector_shape`` (860).
     shape : int or (int, int), optional

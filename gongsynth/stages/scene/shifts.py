@@ -72,7 +72,7 @@ def shifted_channel_weights(wavelength, velocity, instrument=None):
         The spectrum's sampling (strictly increasing, containing the line centre).
     velocity : `~astropy.units.Quantity`
         Line-of-sight velocity (positive: redshift), scalar.
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
 
     Returns
     -------
@@ -197,7 +197,7 @@ def shift_basis(wavelength, instrument=None, *, max_velocity=4 * u.km / u.s, tol
     ----------
     wavelength : `~astropy.units.Quantity`
         The spectral grid of the spectra to be shifted.
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
     max_velocity : `~astropy.units.Quantity`
         Largest |v| (default 4 km/s: the solar rotation, the observer's motion
         and the convective blueshift together stay below ~3 km/s).

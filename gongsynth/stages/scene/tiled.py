@@ -208,7 +208,7 @@ def tile(stack, pixel_size: u.km, *, pointing=None, resolutions=(1, 2, 4, 8), in
     resolutions : sequence of 1 or 4 positive numbers
         Magnification of the tile in the whole field, or in the quadrants
         (bottom-left, bottom-right, top-left, top-right).  Default (1, 2, 4, 8).
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
     detector_shape, shape : int or (int, int), optional
         Detector pixels and supersampled grid (see `sky_grid`).
     dtype : {numpy.float64, numpy.float32}, optional

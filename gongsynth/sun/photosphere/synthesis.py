@@ -43,7 +43,7 @@ def default_wavelength(instrument=None):
 
     Parameters
     ----------
-    instrument : instrument or str, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
         Another instrument's line gets the same grid moved to its
         ``line_wavelength`` (±0.05 nm about it).
 
