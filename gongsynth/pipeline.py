@@ -172,7 +172,7 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="bl
         Camera engine (see `gongsynth.stages.camera.integrate`).
     seed : int, `numpy.random.SeedSequence`, `numpy.random.Generator` or None
         Root seed; ``None`` draws one and records it in ``result.config``.
-    instrument : str or instrument, optional
+    instrument : str or `~gongsynth.instruments.base.Instrument`, optional
         The magnetograph: a name of the family (``"gong"``, the default;
         `gongsynth.instruments.names`) or an instrument object such as
         ``GONGInstrument(seeing_fwhm=2 * u.arcsec)``.  The saved config

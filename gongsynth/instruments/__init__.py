@@ -91,7 +91,7 @@ def get(instrument=None):
 
     Parameters
     ----------
-    instrument : str, instrument or None
+    instrument : str, `~gongsynth.instruments.base.Instrument` or None
         A registered name (``"gong"``; case-insensitive), an instrument
         object (returned as it is), or None (the default, GONG).
 
