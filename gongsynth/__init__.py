@@ -36,6 +36,7 @@ _LAZY = {
     "calibrate": ("gongsynth.analysis.apply_calibration", "calibrate"),
     "load_observation": ("gongsynth.analysis.observations", "load_observation"),
     "model_atmosphere": ("gongsynth.sun.model_atmosphere", "model_atmosphere"),
+    "open_flux": ("gongsynth.analysis.open_flux", "open_flux"),
     "simulate": ("gongsynth.pipeline", "simulate"),
     "simulate_many": ("gongsynth.pipeline", "simulate_many"),
     "surface_field_from_map": ("gongsynth.sun.surface_field", "surface_field_from_map"),
@@ -106,5 +107,6 @@ def __dir__():
 
 __all__ = ["Atmosphere", "GONGInstrument", "GONGSynthMap", "SimulationResult", "StokesCube", "calibrate",
            "calibration", "compare", "filters", "load_observation", "model_atmosphere",
-           "photosphere", "reduction", "rt", "simulate", "simulate_many", "surface_field_from_map",
-           "synthetic_surface_field", "weak_flux_factor", "__citation__", "__version__"]
+           "open_flux", "photosphere", "reduction", "rt", "simulate", "simulate_many",
+           "surface_field_from_map", "synthetic_surface_field", "weak_flux_factor", "__citation__",
+           "__version__"]

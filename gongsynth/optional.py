@@ -10,9 +10,10 @@ extra        provides                         used by
 ``dask``     ``dask[array,distributed]``      `gongsynth.simulate_many` on a cluster
 ``h5py``     ``h5py``                         ``StokesCube.from_rh15d`` (RH 1.5D)
 ``rt``       ``lightweaver``                  radiative transfer check of the line
+``pfss``     ``sunkit-magex``                 `gongsynth.open_flux` (PFSS)
 ============ ================================ ====================================
 
-``pip install 'gongsynth[all]'`` installs the ``dask`` and ``h5py`` extras.
+``pip install 'gongsynth[all]'`` installs the ``dask``, ``h5py`` and ``pfss`` extras.
 """
 import importlib
 

@@ -35,7 +35,9 @@ LAYERS = (
     ("gongsynth.stages.scene",),
     ("gongsynth.stages.optics", "gongsynth.stages.psf", "gongsynth.stages.imagers"),
     ("gongsynth.stages.camera",),
-    ("gongsynth.stages.reduction",),
+    # An instrument's reduction algorithm returns the shared stage's Observables.
+    ("gongsynth.stages.reduction", "gongsynth.instruments.hmi.observables",
+     "gongsynth.instruments.hmi.noise"),
     ("gongsynth.products",),
     ("gongsynth.analysis",),
     ("gongsynth.suns", "gongsynth.config", "gongsynth.chain", "gongsynth.resources", "gongsynth.pipeline",

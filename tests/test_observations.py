@@ -355,3 +355,17 @@ def test_real_hmi_full_disk_continuum_rolled_180_degrees():
     assert result.centre_ratio == pytest.approx(1, abs=0.02)
     with pytest.raises(ObservationKindError, match="CONTINUUM INTENSITY"):
         load_observation(path)
+
+
+@pytest.mark.parametrize("relpath", ["pairs/hmi.Synoptic_Mr_small.2253.fits", "pairs/gong_mrzqs_c2253.fits"])
+def test_synoptic_map_without_observer_is_observed_from_earth(relpath):
+    """HMI's synoptic charts carry no observer; the map gets Earth's at its date, without warnings."""
+    path = real_file(relpath)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        smap = load_observation(path)
+        observer = smap.observer_coordinate
+        smap.wcs
+    assert smap.unit == u.G
+    assert abs(observer.radius.to_value(u.AU) - 1) < 0.02
+    assert abs(observer.lat.to_value(u.deg)) < 7.3  # B0 never exceeds 7.25 deg

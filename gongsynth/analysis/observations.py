@@ -37,7 +37,8 @@ import numpy as np
 import sunpy.map
 from astropy.io import fits
 from astropy.io.fits.verify import VerifyWarning
-from sunpy.coordinates import frames, sun
+from sunpy.coordinates import frames, get_earth, sun
+from sunpy.util.exceptions import SunpyMetadataWarning
 
 from gongsynth.analysis.disk import disk_coordinates
 
@@ -395,6 +396,33 @@ def _mask_gong_sky(smap, header, step, rho):
     return _with_data(smap, data, smap.meta)
 
 
+def _with_earth_observer(smap, notes):
+    """
+    A Carrington synoptic map without observer keywords, observed from Earth on its date.
+
+    HMI's synoptic charts (``hmi.Synoptic_Mr``) carry no observer: sunpy then
+    warns on every use of their WCS.  A synoptic map is made from Earth (or
+    near-Earth) views, so the observer is Earth at the map's date, as sunpy's
+    own GONG synoptic source assumes.  Maps with an observer, or with a
+    source that supplies one, are returned unchanged.
+    """
+    if not str(smap.meta.get("ctype1", "")).upper().startswith("CRLN"):
+        return smap
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", SunpyMetadataWarning)
+        try:
+            smap.observer_coordinate
+            return smap
+        except SunpyMetadataWarning:
+            pass
+    earth = get_earth(smap.date)
+    meta = smap.meta.copy()
+    meta.update({"hgln_obs": earth.lon.to_value(u.deg), "hglt_obs": earth.lat.to_value(u.deg),
+                 "dsun_obs": earth.radius.to_value(u.m)})
+    notes.append("synoptic map without observer keywords: observer placed at Earth on the map's date")
+    return _with_data(smap, smap.data, meta)
+
+
 def load_observation(path, *, kind="magnetogram", repair=True):
     """
     Read a full-disk observation (GONG, HMI, MDI or gongsynth FITS) as a sunpy Map.
@@ -471,6 +499,7 @@ def load_observation(path, *, kind="magnetogram", repair=True):
         raise BadHeaderError(f"{path}: sunpy cannot build a map from this header ({err})") from err
     if not isinstance(smap, sunpy.map.GenericMap):
         raise ValueError(f"{path}: expected one map, sunpy returned {type(smap).__name__}")
+    smap = _with_earth_observer(smap, notes)
     factor = _check_kind(smap, header, kind, path, notes)
     if factor is not None:
         meta = smap.meta.copy()
