@@ -103,3 +103,26 @@ def test_regular_schedule():
     for bad in (10 * u.s, -45 * u.s, 45 * u.m):
         with pytest.raises((ValueError, u.UnitsError), match="duration"):
             whole_frames(bad, 3.75 * u.s)
+
+
+@pytest.mark.parametrize("name", instruments.names())
+@pytest.mark.parametrize("field", [300, -300])
+def test_a_uniform_line_of_sight_field_gives_a_magnetogram_of_its_sign(name, field):
+    """Design §3.21 end to end for every instrument: a tiny run of a uniform vertical field at disk centre."""
+    from gongsynth.sun.photosphere import Photosphere, synthesize
+
+    inst = instruments.get(name)
+    one = np.ones((32, 32))
+    still = 0 * u.km / u.s * one
+    sun = Photosphere(abs(field) * u.G * one, (0 if field > 0 else 180) * u.deg * one, 0 * u.deg * one,
+                      still, still, still, one, 1536 * u.km, periodic=True)
+    cube = synthesize(sun, mu=1.0, instrument=inst)
+    # 45 s: one HMI LOS sequence, 2700 GONG frames.
+    result = gongsynth.simulate(cube, instrument=name, seed=2, duration=45 * u.s, detector_shape=16,
+                                resolutions=(1,), progress=False)
+    b = result.magnetogram.data
+    assert b.shape == (16, 16) and result.raw.data.shape[0] == len(inst.analysers)
+    assert np.all(np.sign(b) == np.sign(field))
+    # The mean of 256 pixels is known to ~1 G (noise ≤ 10 G per pixel); the reductions'
+    # own calibration (GONG's v0 slope, design §3.6; HMI's look-up tables) is good to a few %.
+    assert abs(np.mean(b) / field - 1) < 0.03

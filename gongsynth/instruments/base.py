@@ -135,9 +135,10 @@ class Instrument(Protocol):
         ``effective_area`` (area), ``quantum_efficiency``, ``gain``
         (electron/adu), ``read_noise`` (adu), ``exposure_time`` (time of
         one frame), ``truncate_bits`` (int: low bits dropped after
-        accumulation; 0 where none are), and the synthetic flat and dark
-        knobs read by `gongsynth.stages.camera.detector` (``detector_map_seed``,
-        ``flat_*``, ``dark_*``).
+        accumulation; 0 where none are), and ``detector_maps``: an object
+        holding the synthetic flat and dark knobs read by
+        `gongsynth.stages.camera.detector` (``detector_map_seed``, ``flat_*``,
+        ``dark_*``; GONG: itself).
     Filtergrams
         ``responses(wavelength)`` → dimensionless (n_filtergrams, nλ)
         transmissions; ``integration_half_width`` and ``quadrature_step``
@@ -180,6 +181,7 @@ class Instrument(Protocol):
     read_noise: u.Quantity
     exposure_time: u.Quantity
     truncate_bits: int
+    detector_maps: object
     analysers: tuple
     plane_names: tuple
     algorithm: str

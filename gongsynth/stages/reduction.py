@@ -10,6 +10,7 @@ then the instrument's own algorithm (`~gongsynth.instruments.base.Instrument.alg
 GONG's three-phase √3 arctan (`gongsynth.instruments.gong.reduction`), HMI's
 Fourier coefficients and look-up tables.
 """
+import dataclasses
 import importlib
 import os
 
@@ -197,7 +198,12 @@ def reduce(raw, instrument=None, dark=None, flat=None, *, frames_per_plane=None,
     if flat is not None and flat is not False:
         planes = divide_flat(planes, flat)
 
-    return algorithm(inst)(planes, inst, **options)
+    observed = algorithm(inst)(planes, inst, **options)
+    continuum = u.Quantity(observed.continuum)
+    if continuum.unit == u.one:
+        # The planes given to the algorithm are plain numbers in DN: so is a continuum made from them.
+        observed = dataclasses.replace(observed, continuum=u.Quantity(continuum.value, u.adu))
+    return observed
 
 
 def algorithm(instrument):

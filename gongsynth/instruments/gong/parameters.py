@@ -356,6 +356,11 @@ class GONGInstrument(InstrumentParameters):
         from gongsynth.instruments.gong.schedule import frame_schedule
         return frame_schedule(duration, self)
 
+    @property
+    def detector_maps(self):
+        """The parameters of the synthetic flat and dark (GONG's own fields: the instrument itself)."""
+        return self
+
     def header_cards(self):
         """
         The inversion constants every product records (Landé factor, v0).

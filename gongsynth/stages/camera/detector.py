@@ -108,15 +108,16 @@ def synthetic_flat(shape=None, *, instrument=None, seed=None, tilt=None, vignett
     """
     inst = instruments.get(instrument)
     ny, nx = _detector_shape(shape, inst)
-    seed = inst.detector_map_seed if seed is None else seed
-    tilt = _number(tilt, inst.flat_tilt, u.one)
-    vignetting = _number(vignetting, inst.flat_vignetting, u.one)
-    dust_density = _number(dust_density, inst.flat_dust_density, 1 / u.Mpix)
-    prnu = _number(prnu, inst.flat_prnu, u.one)
+    knobs = inst.detector_maps  # the synthetic maps' parameters
+    seed = knobs.detector_map_seed if seed is None else seed
+    tilt = _number(tilt, knobs.flat_tilt, u.one)
+    vignetting = _number(vignetting, knobs.flat_vignetting, u.one)
+    dust_density = _number(dust_density, knobs.flat_dust_density, 1 / u.Mpix)
+    prnu = _number(prnu, knobs.flat_prnu, u.one)
     if dust_depth is None:
-        dust_depth = (inst.flat_dust_depth_min, inst.flat_dust_depth_max)
+        dust_depth = (knobs.flat_dust_depth_min, knobs.flat_dust_depth_max)
     if dust_radius is None:
-        dust_radius = (inst.flat_dust_radius_min, inst.flat_dust_radius_max)
+        dust_radius = (knobs.flat_dust_radius_min, knobs.flat_dust_radius_max)
     dust_depth = tuple(_number(d, None, u.one) for d in dust_depth)
     dust_radius = tuple(_number(r, None, u.pix) for r in dust_radius)
     for name, value in (("tilt", tilt), ("vignetting", vignetting), ("prnu", prnu),
@@ -198,12 +199,13 @@ def synthetic_dark(shape=None, *, instrument=None, level=None, seed=None, glow=N
     """
     inst = instruments.get(instrument)
     ny, nx = _detector_shape(shape, inst)
-    level = inst.dark_level if level is None else level
-    seed = inst.detector_map_seed if seed is None else seed
-    glow = _number(glow, inst.dark_glow, u.one)
-    glow_length = _number(glow_length, inst.dark_glow_length, u.one)
-    hot_fraction = _number(hot_fraction, inst.dark_hot_fraction, u.one)
-    hot_factor = _number(hot_factor, inst.dark_hot_factor, u.one)
+    knobs = inst.detector_maps  # the synthetic maps' parameters
+    level = knobs.dark_level if level is None else level
+    seed = knobs.detector_map_seed if seed is None else seed
+    glow = _number(glow, knobs.dark_glow, u.one)
+    glow_length = _number(glow_length, knobs.dark_glow_length, u.one)
+    hot_fraction = _number(hot_fraction, knobs.dark_hot_fraction, u.one)
+    hot_factor = _number(hot_factor, knobs.dark_hot_factor, u.one)
     check_quantity(level, u.electron, "level")
     lvl = float(level.to_value(u.electron))
     if not np.isfinite(lvl) or lvl < 0:

@@ -311,7 +311,8 @@ def integrate(expected, *, duration=10 * u.min, engine="blocks", seed=None, inst
         per-frame rounding exactly.
     dither : bool
         Add the dither sequence to the frames (and remove its exact sum from
-        each plane; default).  False: no dither (DITHSUM = 0 in the header).
+        each plane; default).  False: no dither (DITHSUM = 0 in the header).  An
+        instrument without dither (an all-zero schedule) has no DITHSUM cards.
     truncation : bool
         Drop the ``truncate_bits`` lowest bits of each accumulated plane and
         put back the mean bias of doing so (default).  False: keep every bit;
@@ -530,7 +531,7 @@ def _header(schedule, engine, root, flat_source, dark_source, n_snap, inst, effe
         header["SEEDKEY"] = (" ".join(map(str, root.spawn_key)), "spawn key of the camera's SeedSequence")
     header["ITIME"] = (schedule.duration.to_value(u.s), "[s] observing time")
     header["EXPTIME"] = (inst.exposure_time.to_value(u.s), "[s] exposure of one frame")
-    header["FRAMERAT"] = (inst.frame_rate.to_value(u.Hz), "[Hz] camera frame rate")
+    header["FRAMERAT"] = ((schedule.n_frames / schedule.duration).to_value(u.Hz), "[Hz] camera frame rate")
     header["NFRAMES"] = (schedule.n_frames, "frames in the observation")
     for key, card in schedule.header_cards().items():  # the instrument's own counters (GONG: ACCUM, COUNT)
         header[key] = card
@@ -551,5 +552,6 @@ def _header(schedule, engine, root, flat_source, dark_source, n_snap, inst, effe
     for p in range(schedule.n_planes):
         header[f"PLANE{p}"] = (inst.plane_names[p], f"plane {p}")
         header[f"NFRAME{p}"] = (int(schedule.frames_per_plane[p]), f"frames in plane {p}")
-        header[f"DITHSUM{p}"] = (int(dither_sum[p]), f"[adu] dither summed in plane {p}")
+        if schedule.dither.value.any():  # an instrument without dither (HMI) records none
+            header[f"DITHSUM{p}"] = (int(dither_sum[p]), f"[adu] dither summed in plane {p}")
     return header

@@ -44,8 +44,9 @@ def default_wavelength(instrument=None):
     Parameters
     ----------
     instrument : `~gongsynth.instruments.base.Instrument` or str, optional
-        Another instrument's line gets the same grid moved to its
-        ``line_wavelength`` (±0.05 nm about it).
+        Another instrument's line gets the same window moved to its
+        ``line_wavelength`` (±0.05 nm about it), sampled as finely as its
+        channel integrals need (`gongsynth.sun.sampling.spectral_requirement`).
 
     Returns
     -------
@@ -58,9 +59,17 @@ def default_wavelength(instrument=None):
     >>> lam.size, lam[0], lam[-1]
     (51, <Quantity 676.73 nm>, <Quantity 676.83 nm>)
     """
+    from gongsynth.sun.sampling import spectral_requirement
+    inst = instruments.get(instrument)
+    # Halve the step until it is as fine as the instrument's channel integrals need
+    # (`gongsynth.sun.sampling`): GONG's 2 pm passes, HMI's narrower line needs 1 pm.
+    step = spectral_requirement(inst)[1].to_value(u.nm)
+    points = 51
+    while 0.1 / (points - 1) > step * (1 + 1e-6):
+        points = 2 * points - 1
     # For GONG's 676.78 nm the shift is exactly 0: the paper's grid, bit for bit.
-    shift = instruments.get(instrument).line_wavelength.to_value(u.nm) - 676.78
-    return (np.linspace(676.73, 676.83, 51) + shift) * u.nm
+    shift = inst.line_wavelength.to_value(u.nm) - 676.78
+    return (np.linspace(676.73, 676.83, points) + shift) * u.nm
 
 
 def zeeman_splitting(field, wavelength, lande_g):
