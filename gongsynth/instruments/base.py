@@ -444,11 +444,8 @@ def whole_frames(duration, cadence):
 
     Raises
     ------
-    TypeError, astropy.units.UnitsError
-        If ``duration`` is not a time Quantity.
-    ValueError
-        Naming ``duration`` if it is not a finite positive scalar holding a
-        whole number of frames.
+    TypeError, astropy.units.UnitsError, ValueError
+        Naming ``duration`` if it is not a finite positive time holding a whole number of frames.
 
     Examples
     --------
