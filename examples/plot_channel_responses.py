@@ -17,6 +17,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from gongsynth import GONGInstrument
+from gongsynth.instruments.gong.reduction import measured_phase
 from gongsynth.stages.filters import (
     channel_responses,
     channel_weights,
@@ -24,7 +25,6 @@ from gongsynth.stages.filters import (
     modulation_amplitude,
     prefilter_transmission,
 )
-from gongsynth.stages.reduction import measured_phase
 
 gong = GONGInstrument()
 lam0 = gong.line_wavelength

@@ -5,8 +5,9 @@ An end-to-end simulator of the GONG magnetograph, from Stokes spectra of the
 Ni I 676.8 nm line to GONG Doppler and line-of-sight magnetograms as sunpy Maps.
 
 The package's folders follow the data flow: `gongsynth.sun` (the input
-spectra), `gongsynth.stages` (the instrument), `gongsynth.products` (Maps and
-files) and `gongsynth.analysis` (real data, comparison, calibration).
+spectra), `gongsynth.instruments` (GONG and the family: what is each
+instrument's own) and `gongsynth.stages` (what they share), `gongsynth.products`
+(Maps and files) and `gongsynth.analysis` (real data, comparison, calibration).
 
 Most names below are imported when first used (``gongsynth.simulate``
 imports the pipeline, ``gongsynth.compare`` the comparison tools), so that a
@@ -29,7 +30,7 @@ __citation__ = (
 # Public name -> (module, attribute or None for the module itself).
 _LAZY = {
     "Atmosphere": ("gongsynth.sun.atmosphere", "Atmosphere"),
-    "GONGInstrument": ("gongsynth.instrument", "GONGInstrument"),
+    "GONGInstrument": ("gongsynth.instruments.gong.parameters", "GONGInstrument"),
     "SimulationResult": ("gongsynth.pipeline", "SimulationResult"),
     "StokesCube": ("gongsynth.sun.stokes", "StokesCube"),
     "calibrate": ("gongsynth.analysis.apply_calibration", "calibrate"),
@@ -43,10 +44,15 @@ _LAZY = {
     "weak_flux_factor": ("gongsynth.analysis.weak_flux", "weak_flux_factor"),
 }
 
-# The dotted paths promised to users (DESIGN §2) name the modules in their new
-# folders: ``import gongsynth.filters`` gives `gongsynth.stages.filters` itself.
+# The dotted paths promised to users (DESIGN §2), and the old homes of modules
+# that moved, name the modules in their new folders: ``import gongsynth.filters``
+# gives `gongsynth.instruments.gong.filters` itself.
 _ALIASES = {
-    "filters": "gongsynth.stages.filters",
+    "filters": "gongsynth.instruments.gong.filters",
+    "instrument": "gongsynth.instruments.gong.parameters",
+    "planes": "gongsynth.instruments.gong.planes",
+    "stages.filters": "gongsynth.instruments.gong.filters",
+    "stages.camera.schedule": "gongsynth.instruments.gong.schedule",
     "reduction": "gongsynth.stages.reduction",
     "compare": "gongsynth.analysis.compare",
     "calibration": "gongsynth.analysis.calibration",
@@ -78,8 +84,10 @@ class _AliasFinder(importlib.abc.MetaPathFinder):
         return importlib.util.spec_from_loader(fullname, _AliasLoader(_ALIASES[name]))
 
 
+# First in line: an alias wins over a stale file of the same name (an old
+# installation's, or an editable install of another checkout).
 if not any(isinstance(finder, _AliasFinder) for finder in sys.meta_path):
-    sys.meta_path.append(_AliasFinder())
+    sys.meta_path.insert(0, _AliasFinder())
 
 
 def __getattr__(name):

@@ -34,7 +34,8 @@ import astropy.units as u
 import numpy as np
 from sunpy import log
 
-from gongsynth.geometry import Pointing, disk_geometry
+from gongsynth import instruments
+from gongsynth.geometry import Pointing, as_obstime, disk_geometry
 from gongsynth.observing import site_location
 from gongsynth.products.maps import PRODUCTS, make_product_map
 from gongsynth.seeding import child_sequence
@@ -52,7 +53,7 @@ from gongsynth.sun.sampling import check_spectral_sampling
 from gongsynth.suns import SUNS
 
 __all__ = ["Stage", "Chain", "build_chain", "interactive", "run_header", "unmeasured", "large_scale_field",
-           "SKY_FRACTION"]
+           "line_of", "DEFAULT_RT_LINE", "SKY_FRACTION"]
 
 #: A pixel whose light is below this fraction of the brightest pixel's is too
 #: faint for a phase: every product is blanked there (see `unmeasured`).
@@ -218,12 +219,13 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
     `Chain`
     """
     progress = progress and interactive()
-    inst = config.instrument
+    # Resolved once for every stage: the instrument object and the pointing with its Time.
+    inst = instruments.get(config.instrument)
+    pointing = Pointing(config.latitude, config.obstime)
     effects = config.effects
     for name, given in (("flat", flat), ("dark", dark)):
         if given is not None and given is not True and not getattr(effects, name):
             raise ValueError(f"a user {name} was given but effects.{name} is off: give one or the other")
-    pointing = Pointing(config.latitude, config.obstime)
     stages = Chain()
 
     if stokes is None and config.mode == "full-disk":
@@ -253,8 +255,9 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
     if config.mode == "full-disk":
         def disk_scene(photosphere):
             light, truth = full_disk_scene(photosphere, detector_shape=config.detector_pixels,
-                                           obstime=config.obstime, instrument=inst, progress=progress,
-                                           surface_field=large_scale_field(config, surface_field),
+                                           obstime=pointing.obstime, instrument=inst, progress=progress,
+                                           surface_field=large_scale_field(config, surface_field,
+                                                                           obstime=pointing.obstime),
                                            seed=child_sequence(config.seed, "scene"),
                                            site=site_location(config.site), pointing=config.pointing)
             return {"light": light, "truth_scene": truth}
@@ -266,7 +269,7 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
         if stokes is None and config.sun == "model-atmosphere":
             def atmosphere_transfer(photosphere):
                 return {"stokes": rt_synthesize(photosphere, mu=pointing.mu, azimuth=pointing.los_azimuth,
-                                                progress=progress)}
+                                                progress=progress, **line_of(inst))}
 
             stages.append(Stage("synthesis", ("photosphere",), ("stokes",), atmosphere_transfer,
                                 "LTE Stokes radiative transfer of the model atmosphere at the pointing's mu"))
@@ -281,7 +284,7 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
         elif isinstance(stokes, Atmosphere):
             def radiative_transfer():
                 return {"stokes": rt_synthesize(stokes, mu=pointing.mu, azimuth=pointing.los_azimuth,
-                                                progress=progress)}
+                                                progress=progress, **line_of(inst))}
 
             stages.append(Stage("synthesis", (), ("stokes",), radiative_transfer,
                                 "LTE Stokes radiative transfer of the atmosphere at the pointing's mu"))
@@ -305,7 +308,8 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
             return {"light": light, "truth_scene": truth}
 
         stages.append(Stage("channels", ("stokes",), ("channels",), channels,
-                            "Mueller matrix and filter weights: spectra -> six planes (block by block)"))
+                            "Mueller matrix and filter weights: spectra -> the instrument's planes "
+                            "(block by block)"))
         stages.append(Stage("scene", ("channels", "stokes"), ("light", "truth_scene"), scene,
                             "the planes tiled on the sky at the pointing"))
 
@@ -323,7 +327,8 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
                                  workers=config.workers, progress=progress)}
 
     def reduction(raw, expected_counts):
-        return {"observables": reduce(raw, inst), "sky": unmeasured(expected_counts, config)}
+        return {"observables": reduce(raw, inst),
+                "sky": unmeasured(expected_counts, config, instrument=inst, obstime=pointing.obstime)}
 
     def maps(observables, sky, truth, truth_psf, light):
         made = {"magnetogram": observables.magnetogram, "doppler": observables.doppler,
@@ -343,14 +348,36 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
     stages.append(Stage("camera", ("expected_counts",), ("raw",), camera,
                         "frames, flat, dark, photon and read noise, dither, truncation"))
     stages.append(Stage("reduction", ("raw", "expected_counts"), ("observables", "sky"), reduction,
-                        "dark, flat, three-phase Doppler, B_LOS, pseudo-continuum"))
+                        "dark, flat, the instrument's algorithm: Doppler, B_LOS, continuum"))
     stages.append(Stage("maps", ("observables", "sky", "truth", "truth_psf", "light"),
                         tuple(f"{p}_map" for p in PRODUCTS), maps,
                         "sunpy Maps with helioprojective WCS; sky blanked"))
     return stages
 
 
-def large_scale_field(config, given=None):
+def line_of(instrument):
+    """
+    The `gongsynth.rt.synthesize` keyword that selects the instrument's line.
+
+    Parameters
+    ----------
+    instrument : `~gongsynth.instruments.base.Instrument`
+
+    Returns
+    -------
+    dict
+        ``{}`` for the radiative transfer's default line, Ni I 676.8 nm (so a
+        GONG run calls it exactly as before), else ``{"line": instrument.line}``
+        (the key of its line registry).
+    """
+    return {} if instrument.line == DEFAULT_RT_LINE else {"line": instrument.line}
+
+
+#: The radiative transfer's default line (its line registry's key).
+DEFAULT_RT_LINE = "Ni I 676.8"
+
+
+def large_scale_field(config, given=None, *, obstime=None):
     """
     The surface field a full-disk run follows (`gongsynth.sun.surface_field`).
 
@@ -363,6 +390,8 @@ def large_scale_field(config, given=None):
         A map: a gongsynth surface field is used as it is; any other map (a
         full-disk magnetogram, a synoptic map) goes through
         `~gongsynth.sun.surface_field.surface_field_from_map` at the run's date.
+    obstime : `~astropy.time.Time`, optional
+        The run's date, resolved (default: ``config.obstime``).
 
     Returns
     -------
@@ -371,18 +400,19 @@ def large_scale_field(config, given=None):
     """
     from gongsynth.sun.surface_field import surface_field_from_map, synthetic_surface_field
     from gongsynth.sun.surface_field.maps import check_surface_field
+    time = as_obstime(config.obstime if obstime is None else obstime)
     if given is None:
         if config.surface_field == "synthetic":
-            return synthetic_surface_field(config.obstime, seed=child_sequence(config.seed, "surface-field"))
+            return synthetic_surface_field(time, seed=child_sequence(config.seed, "surface-field"))
         return None
     try:
         check_surface_field(given)
         return given
     except ValueError:
-        return surface_field_from_map(given, config.obstime)
+        return surface_field_from_map(given, time)
 
 
-def unmeasured(expected_counts, config):
+def unmeasured(expected_counts, config, *, instrument=None, obstime=None):
     """
     Detector pixels where the line is not measured, to be blanked in every product.
 
@@ -405,8 +435,12 @@ def unmeasured(expected_counts, config):
     Parameters
     ----------
     expected_counts : `~astropy.units.Quantity`
-        (6, ny, nx) expected electrons per frame.
+        (K, ny, nx) expected electrons per frame.
     config : `~gongsynth.config.SimulationConfig`
+    instrument : `~gongsynth.instruments.base.Instrument`, optional
+        The run's, resolved (default: ``config.instrument``).
+    obstime : `~astropy.time.Time`, optional
+        The run's date, resolved (default: ``config.obstime``).
 
     Returns
     -------
@@ -423,7 +457,9 @@ def unmeasured(expected_counts, config):
     faint = (light < SKY_FRACTION * light.max()) | (signal <= np.sqrt(signal + frames * read**2))
     if config.mode != "full-disk":
         return faint
-    off_disk = ~disk_geometry(light.shape, config.instrument.plate_scale, obstime=config.obstime,
+    inst = instruments.get(config.instrument if instrument is None else instrument)
+    off_disk = ~disk_geometry(light.shape, inst.plate_scale,
+                              obstime=config.obstime if obstime is None else obstime,
                               pointing=config.pointing).on_disk
     return faint | off_disk
 
@@ -451,8 +487,7 @@ def run_header(config):
         "aeff": (inst.effective_area.to_value(u.cm**2), "[cm2] effective area"),
         "gain": (inst.gain.to_value(u.electron / u.adu), "[e/ADU] gain"),
         "rdnoise": (inst.read_noise.to_value(u.adu), "[ADU] read noise"),
-        "landeg": (inst.lande_g.to_value(u.one), "Lande factor used in the inversion"),
-        "v0": (inst.v0.to_value(u.m / u.s / u.rad), "[m/s/rad] Michelson velocity scale"),
+        **inst.header_cards(),   # the instrument's own inversion constants (GONG: Lande factor, v0)
     }
     if config.mode == "tiled":  # a full-disk scene has no single field-centre latitude
         cards = {"simlat": (config.latitude.to_value(u.deg), "[deg] field-centre latitude"), **cards}

@@ -30,6 +30,7 @@ from pathlib import Path
 import astropy.units as u
 from sunpy import log
 
+from gongsynth import instruments
 from gongsynth.config import ENGINES, MODES, Effects
 from gongsynth.resources import CannotRunHereError
 from gongsynth.suns import SUNS
@@ -110,6 +111,8 @@ def build_parser():
                           "(e.g. --latitude 0 25 45 60 70 75)")
     sim.add_argument("--duration", type=_number(float, positive=True), metavar="MIN",
                      help="observation length in minutes (a whole number of 1/60 s frames)")
+    sim.add_argument("--instrument", metavar="NAME",
+                     help=f"the instrument: {', '.join(instruments.names())} (TOML: [instrument] name)")
     sim.add_argument("--engine", choices=ENGINES, help="camera engine")
     sim.add_argument("--mode", choices=MODES, help="scene mode")
     sim.add_argument("--date", "--obstime", dest="obstime", metavar="ISO",
@@ -181,6 +184,8 @@ def _simulation_config(args):
 
     config = SimulationConfig.from_toml(args.config) if args.config else SimulationConfig()
     changes = {}
+    if args.instrument is not None and instruments.get(args.instrument).name != config.instrument.name:
+        changes["instrument"] = instruments.get(args.instrument)  # its defaults; [instrument] was another's
     if args.duration is not None:
         changes["duration"] = args.duration * u.min
     for name in ("engine", "mode", "seed", "workers", "obstime", "sun", "site", "surface_field"):
@@ -193,7 +198,7 @@ def _simulation_config(args):
     if args.like is not None:
         try:
             taken, changes["instrument"] = like_gong(args.like, settings=changes,
-                                                     instrument=config.instrument,
+                                                     instrument=changes.get("instrument", config.instrument),
                                                      mode=changes.get("mode", config.mode))
         except (OSError, ValueError, TypeError, KeyError, IndexError) as exc:
             raise ValueError(f"--like {args.like}: {_cause(exc)} (expected a GONG full-disk FITS "

@@ -21,13 +21,12 @@ import numpy as np
 import tomlkit
 from astropy.time import Time
 
+from gongsynth import instruments
 from gongsynth.geometry import DEFAULT_OBSTIME as _DEFAULT_TIME
 from gongsynth.geometry import Pointing
-from gongsynth.instrument import GONGInstrument
 from gongsynth.observing import GONG_SITES, check_site, like_gong
 from gongsynth.seeding import root_seed
 from gongsynth.stages.camera.integrate import ENGINES
-from gongsynth.stages.camera.schedule import frame_schedule
 from gongsynth.suns import DEFAULT_SUNS, SUNS, default_sun, photosphere_defaults, run_grid_default
 from gongsynth.tomlfmt import toml_table
 
@@ -175,14 +174,13 @@ def _pointing(value, mode):
 def _check_timing(duration, instrument):
     """The duration and the instrument's timing give every accumulation plane frames (before computing)."""
     try:
-        frames = frame_schedule(duration, instrument).frames_per_plane
+        frames = instrument.schedule(duration).frames_per_plane
     except ValueError as exc:
         raise ValueError(f"duration = {duration} with this instrument's timing: {exc}") from exc
     if min(frames) < 1:
-        both = (2 * instrument.lcvr_period).to(u.min)
         raise ValueError(f"duration = {duration} leaves accumulation plane(s) without a frame "
-                         f"(frames per plane {list(map(int, frames))}): it must cover both LCVR states, "
-                         f"at least 2 × lcvr_period = {both:.4g}")
+                         f"(frames per plane {list(map(int, frames))} in {instrument.label}'s schedule): "
+                         f"observe for longer")
 
 
 def _check_dates(obstime, duration):
@@ -325,8 +323,10 @@ class SimulationConfig:
         Full-disk mode: helioprojective (Tx, Ty) of the detector's centre
         (default (0, 0): the Sun's centre on the detector's centre; a real
         GONG image is off centre by up to a few tens of arcsec).
-    instrument : `~gongsynth.GONGInstrument`
-        The instrument.
+    instrument : `~gongsynth.instruments.base.Instrument` or str
+        The instrument: an object of the family (`gongsynth.instruments`) or
+        its name (``"gong"``, the default), stored as the object.  TOML:
+        ``[instrument]`` with ``name`` and every parameter.
 
     Examples
     --------
@@ -362,7 +362,7 @@ class SimulationConfig:
     site: str | None = None
     like: str | None = None
     pointing: tuple = (0 * u.arcsec, 0 * u.arcsec)
-    instrument: GONGInstrument = field(default_factory=GONGInstrument)
+    instrument: object = field(default_factory=instruments.get)
 
     def __post_init__(self):
         if self.sun is None and self.mode in MODES:
@@ -374,6 +374,7 @@ class SimulationConfig:
         if self.photosphere_pixel_size is None:
             object.__setattr__(self, "photosphere_pixel_size", run_grid_default(self.sun, "pixel_size"))
         object.__setattr__(self, "pointing", _pointing(self.pointing, self.mode))
+        object.__setattr__(self, "instrument", instruments.get(self.instrument))  # a name, or the object
         for name, (unit, _) in _QUANTITIES.items():
             value = getattr(self, name)
             value = value if name != "pointing" else u.Quantity(value)
@@ -411,8 +412,6 @@ class SimulationConfig:
             if not _is_int(self.workers) or self.workers < 1:
                 raise ValueError(f"workers must be a positive int or None, got {self.workers!r}")
             object.__setattr__(self, "workers", int(self.workers))
-        if not isinstance(self.instrument, GONGInstrument):
-            raise TypeError(f"instrument must be a GONGInstrument, got {type(self.instrument).__name__}")
         if not isinstance(self.effects, Effects):
             raise TypeError(f"effects must be an Effects, got {type(self.effects).__name__}")
         object.__setattr__(self, "photosphere", _photosphere_knobs(dict(self.photosphere), self.sun))
@@ -441,7 +440,8 @@ class SimulationConfig:
         Parameters
         ----------
         seed : None, int, `numpy.random.SeedSequence` or `numpy.random.Generator`
-        instrument : `~gongsynth.GONGInstrument`, optional
+        instrument : `~gongsynth.instruments.base.Instrument` or str, optional
+            An instrument of the family or its name (default GONG).
         **kwargs
             The other fields.
 
@@ -450,7 +450,7 @@ class SimulationConfig:
         `SimulationConfig`
         """
         seed = root_seed(seed)
-        instrument = GONGInstrument() if instrument is None else instrument
+        instrument = instruments.get(instrument)
         if isinstance(kwargs.get("obstime"), Time):
             kwargs["obstime"] = kwargs["obstime"].isot
         return cls(seed=seed, instrument=instrument, **kwargs)
@@ -612,7 +612,7 @@ class SimulationConfig:
                     raise TypeError(f"[simulation] {name} is a list, e.g. {name} = {example}, "
                                     f"got {sim[name]!r}")
                 sim[name] = tuple(sim[name])
-        instrument = GONGInstrument.from_dict(table.get("instrument", {}))
+        instrument = instruments.from_dict(table.get("instrument", {}))
         if sim.get("like") is not None:
             sim, instrument = like_gong(sim["like"], settings=sim, instrument=instrument,
                                         mode=sim.get("mode", cls.mode),

@@ -136,6 +136,8 @@ def as_obstime(obstime):
     """
     if obstime is None:
         return DEFAULT_OBSTIME
+    if isinstance(obstime, Time):
+        return obstime      # resolved once (by the run's Pointing), never parsed again
     try:
         return Time(obstime)
     except ValueError as err:

@@ -265,7 +265,7 @@ def like_gong(path, *, settings=None, instrument=None, fixed_plate_scale=False, 
     >>> settings["obstime"][:16], settings["site"], round(float(inst.plate_scale.value), 3)
     ('2025-01-09T01:35', 'LE', 2.533)
     """
-    from gongsynth.instrument import GONGInstrument
+    from gongsynth.instruments.gong.parameters import GONGInstrument
 
     settings = dict(settings or {})
     instrument = GONGInstrument() if instrument is None else instrument

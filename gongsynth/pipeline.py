@@ -28,7 +28,7 @@ __all__ = ["SimulationResult", "Sweep", "simulate", "simulate_many", "simulate_e
 @dataclass
 class SimulationResult:
     """
-    The products of one simulated GONG observation.
+    The products of one simulated observation (GONG, or another instrument of the family).
 
     Attributes
     ----------
@@ -37,17 +37,17 @@ class SimulationResult:
     doppler : `~gongsynth.products.maps.GONGSynthMap`
         Measured line-of-sight velocity (m/s, positive away from the observer).
     continuum : `~gongsynth.products.maps.GONGSynthMap`
-        Pseudo-continuum, the sum of the six planes (DN).
+        (Pseudo-)continuum (DN; GONG: the sum of the six planes).
     truth : `~gongsynth.products.maps.GONGSynthMap` or None
         True B_LOS of the input averaged over each detector pixel (G; design §3.13).
     truth_psf : `~gongsynth.products.maps.GONGSynthMap` or None
         The same seen through the instrument PSF first.
     raw : `~gongsynth.stages.camera.integrate.RawPlanes`
-        The six accumulated raw planes.
+        The instrument's K accumulated raw planes (GONG: six).
     expected_counts : `~astropy.units.Quantity`
-        Expected electrons per frame per pixel, shape (6, ny, nx), before noise.
+        Expected electrons per frame per pixel, shape (K, ny, nx), before noise.
     resolution_map : `numpy.ndarray`
-        Tile magnification of each detector pixel (1 = GONG resolution).
+        Tile magnification of each detector pixel (1 = the instrument's resolution).
     config : `~gongsynth.config.SimulationConfig`
         Everything needed to repeat the run bit for bit.
     timings : dict
@@ -156,7 +156,7 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="bl
              effects=None, photosphere=None, flat=None, dark=None, workers=None, progress=True,
              config=None, surface_field=None):
     """
-    Simulate a GONG observation end to end.
+    Simulate a magnetograph's observation end to end (GONG by default).
 
     Parameters
     ----------
@@ -173,7 +173,11 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="bl
         Camera engine (see `gongsynth.stages.camera.integrate`).
     seed : int, `numpy.random.SeedSequence`, `numpy.random.Generator` or None
         Root seed; ``None`` draws one and records it in ``result.config``.
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : str or `~gongsynth.instruments.base.Instrument`, optional
+        The magnetograph: a name of the family (``"gong"``, the default;
+        `gongsynth.instruments.names`) or an instrument object such as
+        ``GONGInstrument(seeing_fwhm=2 * u.arcsec)``.  The saved config
+        records its name and every parameter.
     mode : {"tiled", "full-disk"}
         The paper's tiling, or the photosphere mapped over the visible disk.
     detector_shape : int, optional

@@ -87,11 +87,11 @@ def estimate_memory(config):
     grid = side ** 2
     reach = 2 * math.ceil((inst.psf_radius / inst.plate_scale).to_value(u.one) * inst.supersampling)
     padded = (side + reach) ** 2
-    # Photosphere and channels, 6 planes + truth in float32, and the optics' float32 work
-    # arrays (padded plane, half spectrum, transfer function, common part, a difference).
-    scene = 110 * columns + 4 * grid * 7 + 4 * padded * 6
+    # Photosphere and channels, the instrument's K planes + truth in float32, and the optics'
+    # float32 work arrays (padded plane, half spectrum, transfer function, common part, a difference).
+    scene = 110 * columns + 4 * grid * (len(inst.analysers) + 1) + 4 * padded * 6
     detector = 8 * config.detector_pixels ** 2 * 40
-    frames = int((config.duration * inst.frame_rate).to_value(u.one))
+    frames = inst.schedule(config.duration).n_frames
     schedule = _SCHEDULE_BYTES_PER_FRAME * frames
     return _MARGIN * (max(model, scene) + library + detector + schedule + 300e6) * u.byte  # + the modules
 

@@ -264,7 +264,8 @@ GOOD = np.full((6, 4, 5), 1e3) * u.electron
     (dict(workers=0), ValueError, "workers"),
     (dict(duration=1.5 / 60 * u.s), ValueError, "duration"),
     (dict(expected=np.ones((61, 6, 4, 5)) * u.electron), ValueError, "snapshots"),
-    (dict(instrument="GONG"), TypeError, "instrument"),
+    (dict(instrument="spectroheliograph"), ValueError, "instrument must be one of"),
+    (dict(instrument={"gain": 33}), TypeError, "instrument"),
     (dict(instrument=GONG.replace(read_noise=0.5 * u.adu)), ValueError, "engine='frames'"),
 ])
 def test_bad_input(kwargs, error, match):

@@ -37,6 +37,12 @@ def test_out_of_range_latitude_exits_2(tmp_path, capsys):
     assert "latitude" in capsys.readouterr().err
 
 
+def test_unknown_instrument_exits_2_and_lists_the_known(tmp_path, capsys):
+    assert main(["simulate", "--instrument", "spectroheliograph", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "spectroheliograph" in err and "'gong'" in err
+
+
 def test_usage_errors_exit_2():
     with pytest.raises(SystemExit) as info:
         main(["simulate"])  # --out is required
@@ -58,7 +64,10 @@ def test_effect_switches_and_obstime_reach_the_saved_config(tmp_path):
     path.write_text(cfg.to_toml())
     out = tmp_path / "o"
     assert main(["simulate", "--config", str(path), "--no-photon-noise", "--no-read-noise",
-                 "--obstime", "2009-09-05T18:54:00", "--out", str(out), "--quiet"]) == 0
+                 "--obstime", "2009-09-05T18:54:00", "--instrument", "gong", "--out", str(out),
+                 "--quiet"]) == 0
+    assert '[instrument]\n# the instrument (gongsynth.instruments.get)\nname = "gong"' in (
+        out / "config.toml").read_text()
     saved = SimulationConfig.from_toml(out / "config.toml")
     assert saved.effects.off == ("photon_noise", "read_noise")
     assert saved.obstime.startswith("2009-09-05T18:54")

@@ -3,8 +3,9 @@ The package's layout follows the data flow: imports run down the chain, never up
 
 Layers, earliest first (a module may import from its own layer and earlier ones):
 
-base → sun → stages (filters → channels → scene → optics → camera → reduction)
-→ products → analysis → run (config, pipeline) → cli → the package itself.
+base (with the instruments: what is each instrument's own) → sun → stages
+(channels → scene → optics → camera → reduction: what they share) → products
+→ analysis → run (config, pipeline) → cli → the package itself.
 
 The test parses every module's imports (module level and inside functions) with
 `ast`, so a late import cannot hide an import against the flow.
@@ -21,8 +22,8 @@ PACKAGE = Path(gongsynth.__file__).parent
 #: Module-name prefixes in flow order; the longest matching prefix decides a module's rank.
 LAYERS = (
     ("gongsynth.version", "gongsynth._version", "gongsynth.optional", "gongsynth.validation",
-     "gongsynth.seeding", "gongsynth.planes", "gongsynth.files", "gongsynth.tomlfmt",
-     "gongsynth.instrument", "gongsynth.geometry", "gongsynth.observing", "gongsynth.instruments"),
+     "gongsynth.seeding", "gongsynth.files", "gongsynth.tomlfmt", "gongsynth.instruments",
+     "gongsynth.geometry", "gongsynth.observing"),
     ("gongsynth.sun.rt.atomic_data", "gongsynth.sun.rt.eos", "gongsynth.sun.rt.opacity",
      "gongsynth.sun.rt.hydrostatic"),
     ("gongsynth.sun", "gongsynth.sun.atmosphere_files", "gongsynth.sun.atmosphere",
@@ -30,8 +31,7 @@ LAYERS = (
     ("gongsynth.sun.rt", "gongsynth.sun.rt.kernels", "gongsynth.sun.rt.rays", "gongsynth.sun.rt.truth",
      "gongsynth.sun.rt.synthesis"),
     ("gongsynth.sun.model_atmosphere",),
-    ("gongsynth.stages", "gongsynth.stages.filters"),
-    ("gongsynth.stages.channels",),
+    ("gongsynth.stages", "gongsynth.stages.channels"),
     ("gongsynth.stages.scene",),
     ("gongsynth.stages.optics", "gongsynth.stages.psf", "gongsynth.stages.imagers"),
     ("gongsynth.stages.camera",),

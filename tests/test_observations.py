@@ -365,7 +365,7 @@ def test_synoptic_map_without_observer_is_observed_from_earth(relpath):
         warnings.simplefilter("error")
         smap = load_observation(path)
         observer = smap.observer_coordinate
-        smap.wcs
+        assert smap.wcs.wcs.ctype[0].startswith("CRLN")
     assert smap.unit == u.G
     assert abs(observer.radius.to_value(u.AU) - 1) < 0.02
     assert abs(observer.lat.to_value(u.deg)) < 7.3  # B0 never exceeds 7.25 deg

@@ -3,7 +3,7 @@ import astropy.units as u
 import numpy as np
 import pytest
 
-from gongsynth import GONGInstrument
+from gongsynth import GONGInstrument, instruments
 from gongsynth.geometry import Pointing, viewing_geometry
 from gongsynth.stages import channels as polarimetry
 from gongsynth.stages.channels import (
@@ -108,9 +108,10 @@ def test_per_pixel_mueller_acts_pixel_by_pixel():
     assert np.array_equal(got[:, mask], ref[:, mask])
 
 
-def test_filter_first_equals_the_papers_literal_order():
-    """Mueller → PSF → pixelize → filter, per wavelength, on a small tiled scene."""
-    inst = GONGInstrument()
+@pytest.mark.parametrize("name", instruments.names())
+def test_filter_first_equals_the_papers_literal_order(name):
+    """Mueller → PSF → pixelize → filter, per wavelength, on a small tiled scene, for every instrument."""
+    inst = instruments.get(name)
     latitude = 60 * u.deg
     mu, azimuth = viewing_geometry(latitude)
     cube = synthesize(random_photosphere((16, 16), seed=5), mu=mu, los_azimuth=azimuth, instrument=inst)
@@ -130,14 +131,14 @@ def test_filter_first_equals_the_papers_literal_order():
 
     # The paper's order, wavelength by wavelength.
     weights = channel_weights(cube.wavelength, inst).to_value(u.cm)
-    spectra = polarized_spectra(cube, mueller=mueller)  # (2, ny, nx, nλ)
-    literal = np.zeros((6,) + fast.shape[1:])
+    spectra = polarized_spectra(cube, mueller=mueller)  # (2, ny, nx, nλ): I+V, I-V
+    literal = np.zeros((len(inst.analysers),) + fast.shape[1:])
     for j in range(cube.shape[2]):
         sky = radiance_at_earth(tile(spectra[..., j], cube.pixel_size, **geometry))
         seen = observe(sky, light.pixel_scale, instrument=inst, boundary=light.boundary)
         seen = seen.to_value(u.erg / (u.s * u.cm**3 * u.arcsec**2))
-        for p in range(2):
-            literal[3 * p:3 * p + 3] += weights[:, j, None, None] * seen[p]
+        for k, (filtergram, sign) in enumerate(inst.analysers):
+            literal[k] += weights[filtergram, j, None, None] * seen[0 if sign > 0 else 1]
     fast = fast.to_value(u.erg / (u.s * u.cm**2 * u.arcsec**2))
     assert np.max(np.abs(fast - literal)) < 1e-12 * np.max(np.abs(literal))
 

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from gongsynth.instrument import GONGInstrument
+from gongsynth.instruments.gong.reduction import measured_phase, phase_to_velocity
 from gongsynth.stages.channels import channel_images
-from gongsynth.stages.reduction import measured_phase, phase_to_velocity
 from gongsynth.sun.photosphere.columns import Photosphere
 from gongsynth.sun.photosphere.synthesis import default_wavelength, synthesize
 from gongsynth.sun.sampling import check_spectral_sampling, spectral_requirement

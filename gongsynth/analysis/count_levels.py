@@ -76,9 +76,9 @@ import astropy.units as u
 import numpy as np
 from astropy.table import QTable
 
+from gongsynth import instruments
 from gongsynth.analysis.disk import disk_coordinates
-from gongsynth.instrument import resolve_instrument
-from gongsynth.planes import N_CHANNELS, N_PLANES
+from gongsynth.instruments.gong.planes import N_CHANNELS, N_PLANES
 from gongsynth.stages.reduction import divide_flat, subtract_dark
 
 __all__ = ["DIODE_KEYWORDS", "PHASE_PLANES", "RealCountLevels", "real_count_levels", "count_levels"]
@@ -281,7 +281,7 @@ def _simulated_parts(simulated, instrument):
     config = getattr(simulated, "config", None)
     if instrument is None and config is not None:
         instrument = getattr(config, "instrument", None)
-    inst = resolve_instrument(instrument)
+    inst = instruments.get(instrument)
     return raw, continuum, getattr(simulated, "expected_counts", None), inst, getattr(config, "mode", None)
 
 

@@ -24,6 +24,7 @@ import scipy.signal
 import scipy.sparse
 import sunpy.map
 
+from gongsynth import instruments
 from gongsynth.analysis.disk import (
     check_map,
     helioprojective_frame,
@@ -31,7 +32,6 @@ from gongsynth.analysis.disk import (
     local_pixel_scale,
     map_values,
 )
-from gongsynth.instrument import resolve_instrument
 from gongsynth.validation import check_quantity
 
 __all__ = ["AUTO_DEGRADE_FRACTION", "DEGRADE_OPTIONS", "overlap_operator", "degrade_to_gong",
@@ -245,7 +245,7 @@ def degrade_to_gong(smap, instrument=None, *, psf=None, native_fwhm=None, min_co
     ((20, 20), <Quantity 2.5 arcsec / pix>, 1.0)
     """
     check_map(smap, "smap", finite=True)
-    inst = resolve_instrument(instrument)
+    inst = instruments.get(instrument)
     min_coverage = float(min_coverage)
     if not 0 < min_coverage <= 1:
         raise ValueError(f"min_coverage must lie in (0, 1], got {min_coverage}")
@@ -326,7 +326,7 @@ def degrade_if_finer(smap, instrument=None, *, degrade="auto"):
     """
     if degrade not in DEGRADE_OPTIONS:
         raise ValueError(f"degrade must be 'auto', True or False, got {degrade!r}")
-    inst = resolve_instrument(instrument)
+    inst = instruments.get(instrument)
     if degrade == "auto":
         degrade = bool(local_pixel_scale(smap) < AUTO_DEGRADE_FRACTION * inst.plate_scale)
     if degrade:

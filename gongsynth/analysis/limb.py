@@ -13,11 +13,11 @@ import astropy.units as u
 import numpy as np
 from astropy.table import QTable
 
+from gongsynth import instruments
 from gongsynth.analysis.degrade import degrade_if_finer
 from gongsynth.analysis.disk import check_map, disk_coordinates, map_values
 from gongsynth.analysis.noise import disk_centre_level
 from gongsynth.analysis.statistics import check_fraction
-from gongsynth.instrument import resolve_instrument
 
 __all__ = ["LimbDarkeningProfile", "limb_darkening", "LimbDarkeningComparison", "compare_limb_darkening"]
 
@@ -244,7 +244,7 @@ def compare_limb_darkening(sim_map, obs_map, *, instrument=None, degrade="auto",
     """
     if len(labels) != 2:
         raise ValueError(f"labels must be two strings, got {labels!r}")
-    inst = resolve_instrument(instrument)
+    inst = instruments.get(instrument)
     profiles = []
     for smap, name in ((sim_map, "sim_map"), (obs_map, "obs_map")):
         check_map(smap, name, finite=True)

@@ -411,8 +411,8 @@ def _with_earth_observer(smap, notes):
     with warnings.catch_warnings():
         warnings.simplefilter("error", SunpyMetadataWarning)
         try:
-            smap.observer_coordinate
-            return smap
+            if smap.observer_coordinate is not None:
+                return smap
         except SunpyMetadataWarning:
             pass
     earth = get_earth(smap.date)

@@ -12,11 +12,11 @@ import matplotlib.colors as mcolors
 import numpy as np
 from sunpy.map import GenericMap
 
-from gongsynth.geometry import wcs_header
-from gongsynth.instrument import resolve_instrument
+from gongsynth import instruments
+from gongsynth.geometry import TELESCOPE, wcs_header
 from gongsynth.version import version as __version__
 
-__all__ = ["GONGSynthMap", "PRODUCTS", "product_header", "make_product_map"]
+__all__ = ["GONGSynthMap", "PRODUCTS", "product_header", "make_product_map", "simulated_telescope"]
 
 #: Product names, their FITS ``CONTENT`` and ``BUNIT``.
 PRODUCTS = {
@@ -38,6 +38,28 @@ def _product(product):
     return PRODUCTS[product]
 
 
+def simulated_telescope(instrument):
+    """
+    The TELESCOP of a simulated instrument's products: never a real source's name (design §3.22).
+
+    Parameters
+    ----------
+    instrument : `~gongsynth.instruments.base.Instrument`
+
+    Returns
+    -------
+    str
+        ``"gongsynth (simulated GONG)"``, ``"gongsynth (simulated HMI)"``, ...
+
+    Examples
+    --------
+    >>> from gongsynth import instruments
+    >>> simulated_telescope(instruments.get("gong"))
+    'gongsynth (simulated GONG)'
+    """
+    return TELESCOPE.replace("GONG", instrument.label)
+
+
 def product_header(shape, *, centre, scale, product, instrument=None, duration=None, extra=None):
     """
     FITS header of a gongsynth product map with a helioprojective WCS.
@@ -52,8 +74,9 @@ def product_header(shape, *, centre, scale, product, instrument=None, duration=N
         Pixel size (angle per pixel).
     product : str
         One of `PRODUCTS`.
-    instrument : `~gongsynth.GONGInstrument`, optional
-        Supplies the line wavelength (WAVELNTH).
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
+        Supplies the telescope and detector names, the line wavelength
+        (WAVELNTH) and the frame exposure (default GONG).
     duration : `~astropy.units.Quantity`, optional
         Length of the integration that starts at ``centre.obstime``
         (DATE-OBS): written as DATE-BEG, DATE-AVG, DATE-END and XPOSURE
@@ -82,12 +105,13 @@ def product_header(shape, *, centre, scale, product, instrument=None, duration=N
     ('2019-06-07T00:20:00.000', '2019-06-07T00:30:00.000', 600.0, 0.01667)
     """
     content, unit = _product(product)
-    inst = resolve_instrument(instrument)
+    inst = instruments.get(instrument)
     header = wcs_header(shape, scale, centre, wavelength=inst.line_wavelength, unit=unit)
+    header["telescop"] = simulated_telescope(inst)
     header["origin"] = "gongsynth"
     header["dtype"] = "SIMULATED"
     header["content"] = content
-    header["detector"] = "simulated GONG camera"
+    header["detector"] = f"simulated {inst.label} camera"
     header["gsvers"] = __version__
     header["exptime"] = float(inst.exposure_time.to_value(u.s))
     comments = dict(header.get("keycomments", {}))
@@ -98,7 +122,7 @@ def product_header(shape, *, centre, scale, product, instrument=None, duration=N
         header["date-avg"] = (start + duration / 2).isot
         header["date-end"] = (start + duration).isot
         # Frames follow each other without gaps: accumulated exposure = frames x exposure.
-        frames = (u.Quantity(duration) * inst.frame_rate).to_value(u.one)
+        frames = inst.schedule(u.Quantity(duration)).n_frames
         header["xposure"] = float(frames * inst.exposure_time.to_value(u.s))
         comments["XPOSURE"] = "[s] accumulated exposure of all frames"
     for key, value in (extra or {}).items():

@@ -1,21 +1,22 @@
 r"""
-Polarimetry and the filter: Stokes spectra → six channel images (filter first).
+Polarimetry and the filter: Stokes spectra → the instrument's K planes (filter first).
 
-GONG measures I+V and I−V (the LCVR's two states) through three wave-plate
-sectors.  The optics after the Sun (Mueller matrices, PSF, resampling,
+An instrument measures I+V and I−V (GONG: the LCVR's two states; HMI: LCP and
+RCP) through its filtergrams (GONG: three wave-plate sectors; HMI: six tuning
+positions).  The optics after the Sun (Mueller matrices, PSF, resampling,
 binning) are linear and, over the line window, achromatic, so integrating the
-spectra against the channel responses commutes with them (design §1).  This
-module therefore collapses every spectrum to six numbers *before* any spatial
+spectra against the filtergram responses commutes with them (design §1).  This
+module therefore collapses every spectrum to K numbers *before* any spatial
 work:
 
 .. math::
 
-    P_{p,c}(x, y) = \sum_j W_{c j}\,\big[(M S)_0 + s_p\,(M S)_3\big](x, y, \lambda_j),
-    \qquad s_0 = +1,\ s_1 = -1,
+    P_k(x, y) = \sum_j W_{f_k j}\,\big[(M S)_0 + s_k\,(M S)_3\big](x, y, \lambda_j),
 
-with W = `gongsynth.filters.channel_weights` and M the instrument Mueller
-matrix (identity by default: no cross-talk).  Plane order is
-`gongsynth.planes` (index = pol × 3 + channel).
+with :math:`(f_k, s_k)` the instrument's ``analysers`` (filtergram, sign of
+V) of plane k, W = `gongsynth.instruments.quadrature.channel_weights` and M the
+instrument Mueller matrix (identity by default: no cross-talk).  GONG's plane
+order is `gongsynth.planes` (index = pol × 3 + channel, s = +1 then −1).
 
 As in the paper the two states are I±V without the factor 1/2 of a real
 analyser; the effective area (0.6 cm², tuned to real GONG counts) absorbs it.
@@ -23,9 +24,8 @@ analyser; the effective area (0.6 cm², tuned to real GONG counts) absorbs it.
 import astropy.units as u
 import numpy as np
 
-from gongsynth.instrument import resolve_instrument
-from gongsynth.planes import N_CHANNELS, N_PLANES, N_POLARISATIONS
-from gongsynth.stages.filters import channel_weights
+from gongsynth import instruments
+from gongsynth.instruments.quadrature import channel_weights
 from gongsynth.sun.photosphere import DeferredStokes
 from gongsynth.validation import check_finite
 
@@ -38,30 +38,33 @@ CHANNEL_UNIT = u.Unit("erg / (s cm2 sr)")
 #: The default Mueller matrix: a perfect instrument (identity, no cross-talk).
 IDEAL_MUELLER = np.eye(4)
 
-# Sign of V in the two LCVR states (plane order of gongsynth.planes).
-_V_SIGN = np.array([1.0, -1.0])
+# Sign of V in the two analyser states, I+V then I-V.
+_V_SIGN = (1, -1)
 
 # Spectra converted to float64 this many at a time (bounded temporaries).
 _BLOCK_SPECTRA = 65536
 
 
-def analyser_coefficients(mueller=None):
+def analyser_coefficients(mueller=None, signs=_V_SIGN):
     """
-    Weights of (I, Q, U, V) in the intensity measured in each LCVR state.
+    Weights of (I, Q, U, V) in the intensity measured through each analyser.
 
-    Row p of the result is (M[0] + s_p M[3]) with s = (+1, −1): the Stokes I
-    and V after the instrument Mueller matrix M, combined as I+V and I−V.
+    Row p of the result is (M[0] + s_p M[3]): the Stokes I and V after the
+    instrument Mueller matrix M, combined as I + s_p V.
 
     Parameters
     ----------
     mueller : array_like, optional
         Dimensionless Mueller matrix of shape (4, 4), or one per wavelength
         (nλ, 4, 4), or one per pixel (ny, nx, 4, 4).  Default: identity.
+    signs : sequence of int
+        The sign of V of each analyser: default (+1, −1), I+V and I−V; an
+        instrument's per-plane signs give one row per plane.
 
     Returns
     -------
     `numpy.ndarray`
-        Shape ``(..., 2, 4)`` where ``...`` is the leading shape of ``mueller``.
+        Shape ``(..., len(signs), 4)`` where ``...`` is the leading shape of ``mueller``.
 
     Examples
     --------
@@ -70,7 +73,8 @@ def analyser_coefficients(mueller=None):
            [ 1.,  0.,  0., -1.]])
     """
     m = _check_mueller(IDEAL_MUELLER if mueller is None else mueller)
-    rows = m[..., 0, :][..., None, :] + _V_SIGN[:, None] * m[..., 3, :][..., None, :]
+    sign = np.asarray(signs, dtype=float)
+    rows = m[..., 0, :][..., None, :] + sign[:, None] * m[..., 3, :][..., None, :]
     return rows
 
 
@@ -88,11 +92,11 @@ def _check_mueller(mueller):
     return m
 
 
-def _coefficients_for(stokes, mueller):
-    """Analyser coefficients and their kind: 'global', 'spectral' or 'spatial'."""
+def _coefficients_for(stokes, mueller, signs=_V_SIGN):
+    """Analyser coefficients (one row per sign) and their kind: 'global', 'spectral' or 'spatial'."""
     ny, nx, nl = stokes.shape
     if mueller is None:
-        return analyser_coefficients(), "global"
+        return analyser_coefficients(signs=signs), "global"
     m = _check_mueller(mueller)
     if m.ndim == 2:
         kind = "global"
@@ -104,7 +108,7 @@ def _coefficients_for(stokes, mueller):
         if m.shape[:2] != (ny, nx):
             raise ValueError(f"a per-pixel mueller must have shape ({ny}, {nx}, 4, 4), got {m.shape}")
         kind = "spatial"
-    return analyser_coefficients(m), kind
+    return analyser_coefficients(m, signs), kind
 
 
 def _stokes_arrays(stokes):
@@ -144,8 +148,8 @@ def polarized_spectra(stokes, *, mueller=None):
     from gongsynth.sun.stokes import RADIANCE_UNIT
     coeff, kind = _coefficients_for(stokes, mueller)
     arrays = _stokes_arrays(stokes)
-    out = np.zeros((N_POLARISATIONS,) + stokes.shape)
-    for p in range(N_POLARISATIONS):
+    out = np.zeros((len(_V_SIGN),) + stokes.shape)
+    for p in range(len(_V_SIGN)):
         for s, a in enumerate(arrays):
             if kind == "global":
                 c = coeff[p, s]
@@ -160,7 +164,7 @@ def polarized_spectra(stokes, *, mueller=None):
 
 def channel_images(stokes, *, mueller=None, instrument=None):
     """
-    Integrate every spectrum against the six channel responses (filter first).
+    Integrate every spectrum against the instrument's K plane responses (filter first).
 
     Parameters
     ----------
@@ -172,14 +176,16 @@ def channel_images(stokes, *, mueller=None, instrument=None):
         Dimensionless instrument Mueller matrix applied before the I±V
         analysis: (4, 4), per wavelength (nλ, 4, 4) or per pixel (ny, nx, 4, 4).
         Default: identity (the paper's no-cross-talk I+V and I−V).
-    instrument : `~gongsynth.GONGInstrument`, optional
-        Filter chain (`gongsynth.filters.channel_weights`).
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
+        Its filtergrams (`gongsynth.instruments.quadrature.channel_weights`)
+        and ``analysers`` (filtergram and sign of V of each plane).  Default GONG.
 
     Returns
     -------
     `~astropy.units.Quantity`
-        Shape (6, ny, nx), float64, in erg s⁻¹ cm⁻² sr⁻¹ (radiance at the Sun
-        integrated over wavelength), planes in `gongsynth.planes` order.
+        Shape (K, ny, nx), float64, in erg s⁻¹ cm⁻² sr⁻¹ (radiance at the Sun
+        integrated over wavelength), planes in the instrument's order (GONG:
+        `gongsynth.planes`).
 
     Examples
     --------
@@ -192,33 +198,40 @@ def channel_images(stokes, *, mueller=None, instrument=None):
     >>> planes.shape, planes.unit
     ((6, 2, 3), Unit("erg / (s sr cm2)"))
     """
-    inst = resolve_instrument(instrument)
+    inst = instruments.get(instrument)
     if isinstance(stokes, DeferredStokes):
         # Synthesised and collapsed a block of rows at a time: the cube is never held whole.
         return _deferred_channel_images(stokes, mueller, inst)
-    coeff, kind = _coefficients_for(stokes, mueller)
-    weights = channel_weights(stokes.wavelength, inst).to_value(u.cm)  # (3, nλ)
+    filtergram, signs = _analysers(inst)
+    coeff, kind = _coefficients_for(stokes, mueller, signs)  # (..., K, 4)
+    weights = channel_weights(stokes.wavelength, inst).to_value(u.cm)  # (n_filtergrams, nλ)
     ny, nx, nl = stokes.shape
+    n_planes = filtergram.size
     arrays = [a.reshape(ny * nx, nl) for a in _stokes_arrays(stokes)]
     if kind == "spectral":
-        # W'[p, c, s, λ] = W[c, λ] coeff[λ, p, s]: one (24, nλ) matrix, then one product.
-        wmat = np.einsum("cl,lps->pcsl", weights, coeff)
-        used = [s for s in range(4) if np.any(wmat[:, :, s] != 0)]
+        # W'[k, s, λ] = W[f_k, λ] coeff[λ, k, s]: one (4K, nλ) matrix, then one product.
+        wmat = np.einsum("kl,lks->ksl", weights[filtergram], coeff)
+        used = [s for s in range(4) if np.any(wmat[:, s] != 0)]
     else:
         used = [s for s in range(4) if kind == "spatial" or np.any(coeff[..., s] != 0)]
-    out = np.zeros((N_PLANES, ny * nx))
+    out = np.zeros((n_planes, ny * nx))
     for start in range(0, ny * nx, _BLOCK_SPECTRA):
         rows = slice(start, start + _BLOCK_SPECTRA)
         for s in used:
             block = arrays[s][rows].astype(np.float64)
             if kind == "spectral":
-                out[:, rows] += (wmat[:, :, s].reshape(N_PLANES, nl) @ block.T)
+                out[:, rows] += (wmat[:, s] @ block.T)
                 continue
-            integ = weights @ block.T  # (3, n): the channel integrals of Stokes s
-            for p in range(N_POLARISATIONS):
-                c = coeff[p, s] if kind == "global" else coeff[:, :, p, s].reshape(-1)[rows]
-                out[p * N_CHANNELS:(p + 1) * N_CHANNELS, rows] += c * integ
-    return u.Quantity(out.reshape(N_PLANES, ny, nx), CHANNEL_UNIT, copy=False)
+            integ = (weights @ block.T)[filtergram]  # (K, n): the filtergram integrals of Stokes s
+            c = coeff[:, s, None] if kind == "global" else coeff[..., s].reshape(-1, n_planes)[rows].T
+            out[:, rows] += c * integ
+    return u.Quantity(out.reshape(n_planes, ny, nx), CHANNEL_UNIT, copy=False)
+
+
+def _analysers(inst):
+    """(filtergram index (K,), sign of V (K,)) of the instrument's planes."""
+    filtergram, signs = (np.array(column, dtype=np.int64) for column in zip(*inst.analysers))
+    return filtergram, signs
 
 
 def _deferred_channel_images(stokes, mueller, inst):
@@ -228,20 +241,21 @@ def _deferred_channel_images(stokes, mueller, inst):
     or block by block of whole rows for a per-pixel Mueller matrix.
     """
     ny, nx, nl = stokes.shape
+    filtergram, signs = _analysers(inst)
     m = None if mueller is None else _check_mueller(mueller)
     if m is not None and m.ndim == 3 and m.shape[0] != nl:
         raise ValueError(f"a per-wavelength mueller must have shape ({nl}, 4, 4), got {m.shape}")
     if m is not None and m.ndim == 4 and m.shape[:2] != (ny, nx):
         raise ValueError(f"a per-pixel mueller must have shape ({ny}, {nx}, 4, 4), got {m.shape}")
     if m is None or m.ndim < 4:
-        weights = channel_weights(stokes.wavelength, inst).to_value(u.cm)  # (3, nλ)
-        coeff = analyser_coefficients(m)  # (2, 4) or (nλ, 2, 4)
+        weights = channel_weights(stokes.wavelength, inst).to_value(u.cm)  # (n_filtergrams, nλ)
+        coeff = analyser_coefficients(m, signs)  # (K, 4) or (nλ, K, 4)
         if coeff.ndim == 2:
             coeff = np.broadcast_to(coeff, (nl,) + coeff.shape)
-        # W'[p, c, s, λ] = coeff[λ, p, s] W[c, λ]: plane p × 3 + c of Stokes s at λ.
-        contraction = np.einsum("lps,cl->pcsl", coeff, weights).reshape(N_PLANES, 4, nl)
+        # W'[k, s, λ] = coeff[λ, k, s] W[f_k, λ]: plane k of Stokes s at λ.
+        contraction = np.einsum("lks,kl->ksl", coeff, weights[filtergram])
         return u.Quantity(stokes.project(contraction, _BLOCK_SPECTRA), CHANNEL_UNIT, copy=False)
-    out = np.empty((N_PLANES, ny, nx))
+    out = np.empty((filtergram.size, ny, nx))
     for rows, cube in stokes.blocks(_BLOCK_SPECTRA):
         out[:, rows] = channel_images(cube, mueller=m[rows], instrument=inst).value
     return u.Quantity(out, CHANNEL_UNIT, copy=False)

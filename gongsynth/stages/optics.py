@@ -10,7 +10,7 @@ Pixelization follows the paper: bilinear resampling to exactly
 ``supersampling`` × the detector pixels, then ``supersampling`` ×
 ``supersampling`` binning.  Both steps are linear and separable, so they are
 applied as one sparse matrix per axis.  All functions work on any stack
-``(..., ny, nx)``: the six channel planes, or the true B_LOS pushed through the
+``(..., ny, nx)``: the instrument's K planes, or the true B_LOS pushed through the
 same geometry.
 """
 import functools
@@ -22,7 +22,7 @@ import numpy as np
 import scipy.fft
 import scipy.sparse
 
-from gongsynth.instrument import resolve_instrument
+from gongsynth import instruments
 from gongsynth.stages.imagers import BandLimitedImager, ExactImager, image_planes, pixel_means
 from gongsynth.stages.psf import (
     fft_workers,
@@ -246,7 +246,7 @@ def pixelize(stack, pixel_scale: u.arcsec, *, instrument=None, periodic=False, m
         Sampling of ``stack`` on the sky (arcsec per pixel).  The field,
         ``ny * pixel_scale`` by ``nx * pixel_scale``, must be a whole number of
         detector pixels.
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
         Supplies ``plate_scale`` and ``supersampling``.
     periodic : bool
         Interpolate across the edges with wrap-around (periodic scenes) rather
@@ -268,7 +268,7 @@ def pixelize(stack, pixel_scale: u.arcsec, *, instrument=None, periodic=False, m
     >>> pixelize(img, 0.5 * u.arcsec).shape   # 5 arcsec field -> 2 x 2 GONG pixels
     (2, 2)
     """
-    inst = resolve_instrument(instrument)
+    inst = instruments.get(instrument)
     if method not in PIXELIZE_METHODS:
         raise ValueError(f"method must be one of {PIXELIZE_METHODS}, got {method!r}")
     values, unit = _split_unit(stack, "stack")
@@ -337,7 +337,7 @@ def observe(stack, pixel_scale: u.arcsec, *, instrument=None, psf=True, seeing=T
         Shape ``(..., ny, nx)`` sampled at ``pixel_scale``; unit kept.
     pixel_scale : `~astropy.units.Quantity`
         Sampling of ``stack`` (arcsec per pixel).
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
     psf : bool, None or array_like
         ``True`` (default; ``None`` is the same): the instrument PSF
         (`psf_kernel`); ``False``: no PSF at all (pixel average only, e.g. for
@@ -383,7 +383,7 @@ def observe(stack, pixel_scale: u.arcsec, *, instrument=None, psf=True, seeing=T
     >>> bool(np.allclose(observe(flat, 0.5 * u.arcsec, psf=False), 1))
     True
     """
-    inst = resolve_instrument(instrument)
+    inst = instruments.get(instrument)
     kernel = _resolve_kernel(psf, seeing, pixel_scale.to_value(u.arcsec), inst)
     periodic = boundary == "periodic"
     if kernel is None:
@@ -414,7 +414,7 @@ def photometric_factor(instrument=None):
 
     Parameters
     ----------
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
 
     Returns
     -------
@@ -428,7 +428,7 @@ def photometric_factor(instrument=None):
     >>> f.unit == u.electron / (u.erg / (u.s * u.cm**2 * u.arcsec**2))
     True
     """
-    inst = resolve_instrument(instrument)
+    inst = instruments.get(instrument)
     photon = (const.h * const.c / inst.line_wavelength).to(u.erg)
     factor = (inst.plate_scale**2 * inst.effective_area * inst.exposure_time
               * inst.quantum_efficiency / photon)
@@ -437,7 +437,7 @@ def photometric_factor(instrument=None):
 
 def expected_counts(scene, instrument=None, *, psf=True, seeing=True, workers=None, band_limited=True):
     """
-    Expected electrons per frame in each detector pixel for the six planes.
+    Expected electrons per frame in each detector pixel for the instrument's K planes.
 
     PSF (with the scene's boundary handling), pixelization, then photometry
     (`photometric_factor`).
@@ -446,7 +446,7 @@ def expected_counts(scene, instrument=None, *, psf=True, seeing=True, workers=No
     ----------
     scene : `~gongsynth.stages.scene.scene.Scene`
         Radiance at Earth per arcsec², ``(6, NY, NX)`` (any leading length works).
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
         Defaults to the instrument the scene was built with.
     psf : bool, None or array_like
         As in `observe`: ``True`` (default) the instrument PSF, ``False`` none,
@@ -474,7 +474,7 @@ def expected_counts(scene, instrument=None, *, psf=True, seeing=True, workers=No
     >>> e.shape, e.unit
     ((6, 4, 4), Unit("electron"))
     """
-    inst = resolve_instrument(instrument if instrument is not None else getattr(scene, "instrument", None))
+    inst = instruments.get(instrument if instrument is not None else getattr(scene, "instrument", None))
     radiance = check_quantity(scene.data, u.erg / (u.s * u.cm**2 * u.arcsec**2), "scene.data")
     planes = observe(radiance, scene.pixel_scale, instrument=inst, psf=psf, seeing=seeing,
                      boundary=scene.boundary, workers=workers, band_limited=band_limited)
@@ -510,7 +510,7 @@ def image_scene(light, truth=None, instrument=None, *, psf=True, seeing=True, wo
         Radiance at Earth per arcsec² (6, NY, NX).
     truth : `~gongsynth.stages.scene.scene.Scene`, optional
         A map (NY, NX) on the same grid (e.g. B_LOS in G).
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
         Defaults to the light scene's.
     psf, seeing : optional
         As in `observe`.
@@ -527,7 +527,7 @@ def image_scene(light, truth=None, instrument=None, *, psf=True, seeing=True, wo
     truth_map, truth_psf : `~astropy.units.Quantity` or None
         The truth averaged over each detector pixel, without and with the PSF.
     """
-    inst = resolve_instrument(instrument if instrument is not None else getattr(light, "instrument", None))
+    inst = instruments.get(instrument if instrument is not None else getattr(light, "instrument", None))
     unit = u.erg / (u.s * u.cm**2 * u.arcsec**2)
     values = getattr(light, "planes", None)
     if isinstance(values, DeferredStack):  # made from checked (finite) input

@@ -1,5 +1,5 @@
 r"""
-The point-spread function of GONG: Airy pattern of the aperture ⊗ Gaussian seeing.
+The point-spread function of an instrument: Airy pattern of its aperture ⊗ Gaussian seeing.
 
 The PSF is the Airy pattern of the circular aperture D at the line wavelength
 λ0 convolved with Gaussian seeing (paper Sec. 3.2, design §3.9).  Both factors
@@ -34,7 +34,7 @@ import numpy as np
 import scipy.interpolate
 import scipy.special
 
-from gongsynth.instrument import resolve_instrument
+from gongsynth import instruments
 from gongsynth.validation import check_finite
 
 __all__ = ["psf_profile", "psf_kernel", "normalize_kernel", "psf_instrument", "wrapped_kernel", "fft_workers"]
@@ -110,7 +110,7 @@ def psf_instrument(instrument=None, *, seeing=True):
 
     Parameters
     ----------
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
     seeing : bool
         False: the same instrument with ``seeing_fwhm = 0`` (diffraction only).
 
@@ -124,7 +124,7 @@ def psf_instrument(instrument=None, *, seeing=True):
     >>> psf_instrument(seeing=False).seeing_fwhm
     <Quantity 0. arcsec>
     """
-    inst = resolve_instrument(instrument)
+    inst = instruments.get(instrument)
     if not isinstance(seeing, (bool, np.bool_)):
         raise TypeError(f"seeing must be True or False, got {seeing!r}")
     return inst if seeing else inst.replace(seeing_fwhm=0 * u.arcsec)
@@ -139,7 +139,7 @@ def psf_profile(radius: u.arcsec, instrument=None, *, seeing=True):
     ----------
     radius : `~astropy.units.Quantity`
         Angular distance from the centre, any shape, in angle units.
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
         Supplies ``aperture``, ``line_wavelength`` and ``seeing_fwhm``
         (0 arcsec gives the pure Airy pattern).
     seeing : bool
@@ -204,7 +204,7 @@ def psf_kernel(pixel_scale: u.arcsec, instrument=None, *, shape=None, seeing=Tru
     ----------
     pixel_scale : `~astropy.units.Quantity`
         Grid spacing, angle (arcsec), positive.
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
     shape : int or (int, int), optional
         Kernel size in pixels.  Default: the odd square that reaches the
         instrument's ``psf_radius`` (100″) from the centre.

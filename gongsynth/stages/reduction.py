@@ -1,82 +1,49 @@
 r"""
-GONG-style reduction: six raw planes to Doppler velocity, B_LOS and continuum.
+The reduction stage: K raw planes to a magnetogram, a Dopplergram and a continuum.
 
-The steps follow the paper's Sec. 3.3:
+Shared by every instrument (the paper's Sec. 3.3 steps 1-2):
 
 1. subtract the dark, scaled by the number of frames in each plane;
 2. divide by the flat (normalised by its median);
-3. measure the phase of I+V and I-V with the √3 arctan (paper Eq. 5), resolve
-   the quadrant, and reference it to the phase of a line at rest (design §3.4):
-   :math:`v^\pm = v_0\,\mathrm{wrap}(\phi_\mathrm{ref} - \phi^\pm)`;
-4. :math:`v = (v^+ + v^-)/2`, :math:`B_\mathrm{LOS} = k_B (v^+ - v^-)/2` with
-   :math:`k_B = 4\pi m_e c/(e g \lambda_0)` (0.7038 G per m/s, paper Eq. 9);
-5. the pseudo-continuum is the sum of the six planes (paper Eq. 11).
 
-Each polarisation's phase is only defined within ±π, i.e. ±v0·π ≈ ±6.76 km/s
-about the reference: with a line at rest |B| up to about 4.7 kG is measured
-without wrapping, less when the line is Doppler shifted.  A wrapped pixel
-cannot be recognised from its own six numbers, so `Observables.wrapped` flags
-the pixels *at risk*: those where either polarisation's phase lies within
-``wrap_margin`` (the instrument's, 0.3 rad ≈ 650 m/s ≈ 450 G by default) of ±π.  With a line at
-rest that flags 4.3 kG < |B| < 5.2 kG; fields stronger still wrap to values
-that look ordinary.
+then the instrument's own algorithm (`~gongsynth.instruments.base.Instrument.algorithm`):
+GONG's three-phase √3 arctan (`gongsynth.instruments.gong.reduction`), HMI's
+Fourier coefficients and look-up tables.
 """
-import functools
-import math
+import dataclasses
+import importlib
 import os
-from dataclasses import dataclass
 
 import astropy.units as u
 import numpy as np
 
-from gongsynth.instrument import resolve_instrument
-from gongsynth.planes import N_CHANNELS, N_PLANES
+from gongsynth.instruments import get
+from gongsynth.instruments.base import Observables
 from gongsynth.stages.camera.detector import normalise_flat, read_dark
-from gongsynth.stages.filters import filter_quadrature
 from gongsynth.validation import check_finite, check_quantity
 
-__all__ = ["Observables", "reduce", "subtract_dark", "divide_flat", "measured_phase", "phase_to_velocity",
-           "reference_phase"]
+__all__ = ["Observables", "reduce", "algorithm", "subtract_dark", "divide_flat"]
+
+# GONG's algorithm moved to its instrument; its old path here still resolves.
+_MOVED = {"measured_phase", "phase_to_velocity", "reference_phase"}
 
 
-@dataclass(frozen=True)
-class Observables:
-    """
-    What the reduction measures in each pixel.
-
-    Attributes
-    ----------
-    magnetogram : `~astropy.units.Quantity`
-        Line-of-sight flux density B_LOS, in G.
-    doppler : `~astropy.units.Quantity`
-        Line-of-sight velocity (positive = redshift, away from the observer), in m/s.
-    continuum : `~astropy.units.Quantity`
-        Pseudo-continuum: sum of the six dark- and flat-corrected planes, in DN (adu).
-    velocity : `~astropy.units.Quantity`
-        Shape (2, ...): velocities of I+V and I-V, in m/s.
-    phase : `~astropy.units.Quantity`
-        Shape (2, ...): measured phases of I+V and I-V, in rad.
-    wrapped : `numpy.ndarray` of bool
-        True where a polarisation's phase is within the wrap margin of ±π, so
-        the measurement may have wrapped (design §3.5).
-    """
-
-    magnetogram: u.Quantity
-    doppler: u.Quantity
-    continuum: u.Quantity
-    velocity: u.Quantity
-    phase: u.Quantity
-    wrapped: np.ndarray
+def __getattr__(name):
+    if name in _MOVED:
+        from gongsynth.instruments.gong import reduction
+        return getattr(reduction, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-def _planes(raw):
-    """The (6, ...) float array of a RawPlanes-like object or an array."""
+def _planes(raw, inst):
+    """The (K, ...) float array of a RawPlanes-like object or an array."""
     data = getattr(raw, "data", raw)
     data = np.asarray(getattr(data, "value", data), dtype=float)
-    if data.ndim < 1 or data.shape[0] != N_PLANES:
+    n_planes = len(inst.analysers)
+    if data.ndim < 1 or data.shape[0] != n_planes:
         raise ValueError(
-            f"raw must have a leading axis of {N_PLANES} planes (I+V ch0-2, I-V ch0-2), "
-            f"got shape {data.shape}"
+            f"raw must have a leading axis of {n_planes} planes ({', '.join(inst.plane_names)}) "
+            f"for {inst.label}, got shape {data.shape}"
         )
     return check_finite(data, "raw")
 
@@ -91,12 +58,13 @@ def subtract_dark(planes, dark, frames_per_plane, instrument=None):
     Parameters
     ----------
     planes : `numpy.ndarray`
-        Shape (6, ...), DN.
+        Shape (K, ...), DN.
     dark : `~astropy.units.Quantity`
         Dark current in electron (per frame), shape ``planes.shape[1:]`` or scalar.
     frames_per_plane : array_like of int
-        Frames accumulated in each plane, shape (6,).
-    instrument : `~gongsynth.GONGInstrument`, optional
+        Frames accumulated in each plane, shape (K,).
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
+        Supplies the gain and ``truncate_bits`` (default GONG).
 
     Returns
     -------
@@ -111,21 +79,21 @@ def subtract_dark(planes, dark, frames_per_plane, instrument=None):
     >>> subtract_dark(planes, 264 * u.electron, [600] * 6)[:, 0].tolist()  # 600*264/33/8 = 600
     [400.0, 400.0, 400.0, 400.0, 400.0, 400.0]
     """
-    inst = resolve_instrument(instrument)
+    inst = get(instrument)
     check_quantity(dark, u.electron, "dark")
     check_finite(dark, "dark")
     dark_dn = (dark / inst.gain).to_value(u.adu) / 2**inst.truncate_bits
-    frames = _frames(frames_per_plane, planes.ndim)
+    frames = _frames(frames_per_plane, planes.shape[0], planes.ndim)
     return planes - frames * dark_dn
 
 
-def _frames(frames_per_plane, ndim):
+def _frames(frames_per_plane, n_planes, ndim):
     frames = np.asarray(frames_per_plane, dtype=float)
     if frames.shape == ():
-        frames = np.full(N_PLANES, float(frames))
-    if frames.shape != (N_PLANES,) or np.any(frames <= 0):
-        raise ValueError(f"frames_per_plane must be {N_PLANES} positive numbers, got {frames_per_plane!r}")
-    return frames.reshape((N_PLANES,) + (1,) * (ndim - 1))
+        frames = np.full(n_planes, float(frames))
+    if frames.shape != (n_planes,) or np.any(frames <= 0):
+        raise ValueError(f"frames_per_plane must be {n_planes} positive numbers, got {frames_per_plane!r}")
+    return frames.reshape((n_planes,) + (1,) * (ndim - 1))
 
 
 def divide_flat(planes, flat):
@@ -135,9 +103,9 @@ def divide_flat(planes, flat):
     Parameters
     ----------
     planes : `numpy.ndarray`
-        Shape (6, ny, nx).
+        Shape (K, ny, nx).
     flat : array_like or path-like
-        (ny, nx) or (6, ny, nx), as given to the camera.
+        (ny, nx) or (K, ny, nx), as given to the camera.
 
     Returns
     -------
@@ -154,47 +122,24 @@ def divide_flat(planes, flat):
     -------
     `numpy.ndarray`
     """
-    return planes / normalise_flat(flat, planes.shape[1:])
+    return planes / normalise_flat(flat, planes.shape[1:], planes.shape[0])
 
 
-def phase_to_velocity(phase, instrument=None):
+def reduce(raw, instrument=None, dark=None, flat=None, *, frames_per_plane=None, **options):
     """
-    Velocity of a measured phase relative to the rest-line reference phase.
-
-    Parameters
-    ----------
-    phase : array_like or `~astropy.units.Quantity`
-        Measured phase (rad).
-    instrument : `~gongsynth.GONGInstrument`, optional
-
-    Returns
-    -------
-    `~astropy.units.Quantity`
-        m/s; positive for a redshift (the Michelson phase falls with wavelength).
-
-    Examples
-    --------
-    >>> phase_to_velocity(reference_phase() - 0.1 * u.rad).round(2)  # 0.1 rad * v0
-    <Quantity 215.19 m / s>
-    """
-    inst = resolve_instrument(instrument)
-    phase = u.Quantity(phase, u.rad).value
-    delta = np.angle(np.exp(1j * (reference_phase(inst).value - phase)))
-    return (inst.v0 * delta * u.rad).to(u.m / u.s)
-
-
-def reduce(raw, instrument=None, dark=None, flat=None, *, frames_per_plane=None, wrap_margin=None):
-    """
-    Reduce six raw planes to a magnetogram, a Dopplergram and a pseudo-continuum.
+    Reduce K raw planes to a magnetogram, a Dopplergram and a (pseudo-)continuum.
 
     Parameters
     ----------
     raw : `~gongsynth.stages.camera.integrate.RawPlanes` or array_like
-        The planes, shape (6, ...) in DN, ordered as in `gongsynth.planes`.
-        Any spatial shape works (including none: a single pixel).
-    instrument : `~gongsynth.GONGInstrument`, optional
-        Supplies v0, the Landé factor, the gain, the truncation, the wrap
-        margin and the filter model that fixes the velocity zero point.
+        The planes, shape (K, ...) in DN, in the instrument's plane order
+        (GONG: six, as in `gongsynth.planes`).  Any spatial shape works
+        (including none: a single pixel).
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
+        Supplies the gain and truncation (dark subtraction) and the algorithm
+        (`~gongsynth.instruments.base.Instrument.algorithm`; GONG's: v0, the
+        Landé factor, the wrap margin and the filter model that fixes the
+        velocity zero point).  Default GONG.
     dark : None, bool, `~astropy.units.Quantity`, str or path-like
         ``None`` or ``True`` (default): the dark the camera used, ``raw.dark``,
         when ``raw`` carries one, else no dark subtraction; ``False``: a zero
@@ -209,9 +154,10 @@ def reduce(raw, instrument=None, dark=None, flat=None, *, frames_per_plane=None,
     frames_per_plane : array_like of int, optional
         Frames in each plane; taken from ``raw.frames_per_plane`` if omitted.
         Needed only for the dark subtraction.
-    wrap_margin : `~astropy.units.Quantity`, optional
-        Angular distance from ±π below which a pixel is flagged as wrapped;
-        default the instrument's ``wrap_margin`` (0.3 rad).
+    **options
+        Passed to the instrument's algorithm; GONG: ``wrap_margin``
+        (`~astropy.units.Quantity`, angular distance from ±π below which a
+        pixel is flagged as wrapped; default the instrument's, 0.3 rad).
 
     Returns
     -------
@@ -232,8 +178,8 @@ def reduce(raw, instrument=None, dark=None, flat=None, *, frames_per_plane=None,
     >>> abs(obs.doppler.to_value(u.m / u.s)) < 0.5, float(obs.magnetogram.to_value(u.G))
     (np.True_, 0.0)
     """
-    inst = resolve_instrument(instrument)
-    planes = _planes(raw)
+    inst = get(instrument)
+    planes = _planes(raw, inst)
     # A RawPlanes carries what the camera used; a plain array (which has its
     # own unrelated ``.flat``) carries nothing.
     carried = {} if isinstance(raw, np.ndarray) or not hasattr(raw, "frames_per_plane") else {
@@ -252,91 +198,32 @@ def reduce(raw, instrument=None, dark=None, flat=None, *, frames_per_plane=None,
     if flat is not None and flat is not False:
         planes = divide_flat(planes, flat)
 
-    phases = np.stack([measured_phase(planes[p * N_CHANNELS:(p + 1) * N_CHANNELS])
-                       for p in range(2)])
-    velocity = phase_to_velocity(phases, inst)
-    doppler = velocity.mean(axis=0)
-    magnetogram = (inst.gauss_per_velocity * (velocity[0] - velocity[1]) / 2).to(u.G)
-    wrap_margin = inst.wrap_margin if wrap_margin is None else wrap_margin
-    margin = check_quantity(wrap_margin, u.rad, "wrap_margin").to_value(u.rad)
-    offset = np.angle(np.exp(1j * (reference_phase(inst).value - phases)))
-    wrapped = np.any(np.abs(offset) > math.pi - margin, axis=0)
-    return Observables(
-        magnetogram=magnetogram,
-        doppler=doppler,
-        continuum=u.Quantity(planes.sum(axis=0), u.adu),
-        velocity=velocity,
-        phase=u.Quantity(phases, u.rad),
-        wrapped=wrapped,
-    )
+    observed = algorithm(inst)(planes, inst, **options)
+    continuum = u.Quantity(observed.continuum)
+    if continuum.unit == u.one:
+        # The planes given to the algorithm are plain numbers in DN: so is a continuum made from them.
+        observed = dataclasses.replace(observed, continuum=u.Quantity(continuum.value, u.adu))
+    return observed
 
 
-def measured_phase(channels):
-    r"""
-    GONG phase of three channel intensities (the √3 arctan, paper Eq. 5).
-
-    :math:`\phi = \mathrm{atan2}\big(\sqrt3(I_1 - I_2),\ 2I_0 - I_1 - I_2\big)`,
-    i.e. the paper's arctan with the quadrant resolved, so φ covers (-π, π].
+def algorithm(instrument):
+    """
+    The instrument's reduction algorithm, imported from where its ``algorithm`` names it.
 
     Parameters
     ----------
-    channels : array_like
-        Shape (3, ...): I_0, I_1, I_2.  Any units (they cancel).
+    instrument : `~gongsynth.instruments.base.Instrument`
 
     Returns
     -------
-    `numpy.ndarray`
-        Phase in radians, shape (...).
+    callable
+        ``f(planes, instrument, **options)`` → `Observables`.
 
     Examples
     --------
-    >>> import numpy as np
-    >>> x = 0.4
-    >>> channels = [1 + np.cos(x - 2 * np.pi * i / 3) for i in range(3)]
-    >>> round(float(measured_phase(channels)), 6)
-    0.4
+    >>> from gongsynth import instruments
+    >>> algorithm(instruments.get("gong")).__name__
+    'three_phase'
     """
-    i0, i1, i2 = (np.asarray(getattr(c, "value", c), dtype=float) for c in channels)
-    return np.arctan2(math.sqrt(3) * (i1 - i2), 2 * i0 - i1 - i2)
-
-
-def _reference_spectrum(lam_nm, inst):
-    """Continuum-normalised Gaussian rest line used to fix the phase zero point."""
-    sigma = inst.reference_line_fwhm.to_value(u.nm) / (2 * math.sqrt(2 * math.log(2)))
-    depth = inst.reference_line_depth.to_value(u.one)
-    lam0 = inst.line_wavelength.to_value(u.nm)
-    return 1 - depth * np.exp(-0.5 * ((lam_nm - lam0) / sigma) ** 2)
-
-
-@functools.lru_cache(maxsize=32)
-def _reference_phase(inst):
-    grid, dlam, resp = filter_quadrature(inst)
-    spectrum = _reference_spectrum(grid, inst)
-    return float(measured_phase(resp @ (spectrum * dlam)))
-
-
-def reference_phase(instrument=None):
-    """
-    Phase that a line at rest produces: the zero point of GONG velocities.
-
-    The Michelson's λ0/Δλ_m ≈ 22190 waves make θ_m useless as an absolute
-    zero point (design §3.4), so velocities are measured relative to the phase
-    of a Gaussian rest line (``reference_line_fwhm``, ``reference_line_depth``)
-    pushed through the instrument's own filter chain.
-
-    Parameters
-    ----------
-    instrument : `~gongsynth.GONGInstrument`, optional
-
-    Returns
-    -------
-    `~astropy.units.Quantity`
-        In radians, within (-π, π].
-
-    Examples
-    --------
-    >>> phi = reference_phase()
-    >>> phi.unit, bool(-3.15 < phi.value < 3.15)
-    (Unit("rad"), True)
-    """
-    return _reference_phase(resolve_instrument(instrument)) * u.rad
+    module, _, name = instrument.algorithm.partition(":")
+    return getattr(importlib.import_module(module), name)

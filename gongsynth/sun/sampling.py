@@ -14,7 +14,7 @@ import astropy.constants as const
 import astropy.units as u
 import numpy as np
 
-from gongsynth.instrument import resolve_instrument
+from gongsynth import instruments
 from gongsynth.validation import check_quantity
 
 __all__ = ["MAX_FIELD", "MAX_VELOCITY", "spectral_requirement", "check_spectral_sampling"]
@@ -70,7 +70,7 @@ def spectral_requirement(instrument=None, *, max_field=MAX_FIELD, max_velocity=M
     >>> print(f"{half:.1f}, {step:.1f}")
     39.6 pm, 2.0 pm
     """
-    inst = resolve_instrument(instrument)
+    inst = instruments.get(instrument)
     check_quantity(max_field, u.G, "max_field")
     check_quantity(max_velocity, u.km / u.s, "max_velocity")
     lam0 = inst.line_wavelength
@@ -114,7 +114,7 @@ def check_spectral_sampling(wavelength, instrument=None, *, max_field=MAX_FIELD,
     ...
     ValueError: wavelength covers only 676.77000-676.79000 nm; the GONG channel integrals need ...
     """
-    inst = resolve_instrument(instrument)
+    inst = instruments.get(instrument)
     check_quantity(wavelength, u.nm, name)
     lam = np.atleast_1d(wavelength.to_value(u.nm))
     if lam.ndim != 1 or lam.size < 2 or not np.all(np.isfinite(lam)) or np.any(np.diff(lam) <= 0):
@@ -123,7 +123,7 @@ def check_spectral_sampling(wavelength, instrument=None, *, max_field=MAX_FIELD,
                                                                  max_velocity=max_velocity))
     lam0 = inst.line_wavelength.to_value(u.nm)
     lo, hi = lam0 - half, lam0 + half
-    need = (f"the GONG channel integrals need {lo:.5f}-{hi:.5f} nm (the line at {lam0:.4f} nm ± "
+    need = (f"the {inst.label} channel integrals need {lo:.5f}-{hi:.5f} nm (the line at {lam0:.4f} nm ± "
             f"{half * 1e3:.1f} pm: two line widths, the Zeeman shift of {max_field.to_value(u.G):g} G "
             f"and the Doppler shift of {max_velocity.to_value(u.km / u.s):g} km/s) sampled every "
             f"{step * 1e3:.1f} pm or finer, e.g. the paper's 51 points over 676.73-676.83 nm")

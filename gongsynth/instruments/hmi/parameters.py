@@ -163,6 +163,11 @@ class HMIInstrument:
 
     name = "hmi"
     line = "Fe I 617.3"
+    #: The name in metadata; the reduction algorithm (`gongsynth.instruments.hmi.observables.reduce_hmi`,
+    #: imported by the reduction stage); the camera keeps every bit (no truncation, no dither).
+    label = "HMI"
+    algorithm = "gongsynth.instruments.hmi.observables:reduce_hmi"
+    truncate_bits = 0
 
     def __post_init__(self):
         for f in fields(self):
@@ -264,6 +269,55 @@ class HMIInstrument:
         """
         from gongsynth.instruments.hmi.filters import filtergram_responses
         return filtergram_responses(wavelength, self)
+
+    # ------------------------------------------- the family's protocol (gongsynth.instruments.base)
+    @property
+    def plane_names(self):
+        """Short name of each raw plane: ``"LCP I0"`` ... ``"RCP I5"``, tuple of str."""
+        return tuple(f"{'LCP' if sign > 0 else 'RCP'} I{k}" for k, sign in self.analysers)
+
+    def schedule(self, duration):
+        """
+        The LOS camera's frames: one filtergram every ``frame_interval`` (3.75 s), the 12 planes in turn.
+
+        No dither and no truncation.  The real sequence's order of tunings and
+        polarisations within the 45 s is not modelled (each plane gets the same
+        number of frames, which is all the accumulation needs).
+
+        Parameters
+        ----------
+        duration : `~astropy.units.Quantity`
+            A whole number of filtergrams (45 s: one LOS sequence).
+
+        Returns
+        -------
+        `~gongsynth.instruments.base.FrameSchedule`
+        """
+        from gongsynth.instruments.base import FrameSchedule
+        return FrameSchedule.regular(duration, self.frame_interval, N_HMI_PLANES)
+
+    @property
+    def detector_maps(self):
+        """
+        The synthetic flat and dark's parameters: GONG's illustrative ones (chosen).
+
+        No HMI flat or dark is modelled; the camera stage applies these
+        illustrative maps (or none, with the effects ``flat`` and ``dark`` off).
+        """
+        from gongsynth.instruments.gong.parameters import GONGInstrument
+        return GONGInstrument()
+
+    def header_cards(self):
+        """
+        The inversion constants every product records: the Landé factor and K_m.
+
+        Returns
+        -------
+        dict
+        """
+        return {"landeg": (self.lande_g.to_value(u.one), "Lande factor of K_m"),
+                "kmag": (self.gauss_per_velocity.to_value(u.G / (u.m / u.s)),
+                         "[G/(m/s)] B = (v_LCP - v_RCP) K_m")}
 
     # --------------------------------------------------------------- utilities
     @classmethod

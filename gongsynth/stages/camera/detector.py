@@ -24,8 +24,7 @@ import astropy.units as u
 import numpy as np
 from astropy.io import fits
 
-from gongsynth.instrument import resolve_instrument
-from gongsynth.planes import N_PLANES
+from gongsynth import instruments
 from gongsynth.seeding import stage_generator
 from gongsynth.validation import check_finite, check_quantity
 
@@ -73,7 +72,7 @@ def synthetic_flat(shape=None, *, instrument=None, seed=None, tilt=None, vignett
     ----------
     shape : tuple of int, optional
         (ny, nx) in pixels; default the instrument's ``detector_shape`` square.
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
         Supplies the defaults below.
     seed : seed-like, optional
         Seed of the dust positions, gradient direction and PRNU
@@ -107,17 +106,18 @@ def synthetic_flat(shape=None, *, instrument=None, seed=None, tilt=None, vignett
     >>> bool(0.005 < np.std(f - np.roll(f, 1, axis=1)) / np.sqrt(2) < 0.02)
     True
     """
-    inst = resolve_instrument(instrument)
+    inst = instruments.get(instrument)
     ny, nx = _detector_shape(shape, inst)
-    seed = inst.detector_map_seed if seed is None else seed
-    tilt = _number(tilt, inst.flat_tilt, u.one)
-    vignetting = _number(vignetting, inst.flat_vignetting, u.one)
-    dust_density = _number(dust_density, inst.flat_dust_density, 1 / u.Mpix)
-    prnu = _number(prnu, inst.flat_prnu, u.one)
+    knobs = inst.detector_maps  # the synthetic maps' parameters
+    seed = knobs.detector_map_seed if seed is None else seed
+    tilt = _number(tilt, knobs.flat_tilt, u.one)
+    vignetting = _number(vignetting, knobs.flat_vignetting, u.one)
+    dust_density = _number(dust_density, knobs.flat_dust_density, 1 / u.Mpix)
+    prnu = _number(prnu, knobs.flat_prnu, u.one)
     if dust_depth is None:
-        dust_depth = (inst.flat_dust_depth_min, inst.flat_dust_depth_max)
+        dust_depth = (knobs.flat_dust_depth_min, knobs.flat_dust_depth_max)
     if dust_radius is None:
-        dust_radius = (inst.flat_dust_radius_min, inst.flat_dust_radius_max)
+        dust_radius = (knobs.flat_dust_radius_min, knobs.flat_dust_radius_max)
     dust_depth = tuple(_number(d, None, u.one) for d in dust_depth)
     dust_radius = tuple(_number(r, None, u.pix) for r in dust_radius)
     for name, value in (("tilt", tilt), ("vignetting", vignetting), ("prnu", prnu),
@@ -168,7 +168,7 @@ def synthetic_dark(shape=None, *, instrument=None, level=None, seed=None, glow=N
     ----------
     shape : tuple of int, optional
         (ny, nx) in pixels; default the instrument's ``detector_shape`` square.
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
         Supplies the defaults below.
     level : `~astropy.units.Quantity`, optional
         Typical dark current per frame, electron (``dark_level``, 30 e⁻ ≈ 0.9
@@ -197,14 +197,15 @@ def synthetic_dark(shape=None, *, instrument=None, level=None, seed=None, glow=N
     >>> d.unit, d.shape, bool(10 <= float(np.median(d.value)) < 12)
     (Unit("electron"), (32, 32), True)
     """
-    inst = resolve_instrument(instrument)
+    inst = instruments.get(instrument)
     ny, nx = _detector_shape(shape, inst)
-    level = inst.dark_level if level is None else level
-    seed = inst.detector_map_seed if seed is None else seed
-    glow = _number(glow, inst.dark_glow, u.one)
-    glow_length = _number(glow_length, inst.dark_glow_length, u.one)
-    hot_fraction = _number(hot_fraction, inst.dark_hot_fraction, u.one)
-    hot_factor = _number(hot_factor, inst.dark_hot_factor, u.one)
+    knobs = inst.detector_maps  # the synthetic maps' parameters
+    level = knobs.dark_level if level is None else level
+    seed = knobs.detector_map_seed if seed is None else seed
+    glow = _number(glow, knobs.dark_glow, u.one)
+    glow_length = _number(glow_length, knobs.dark_glow_length, u.one)
+    hot_fraction = _number(hot_fraction, knobs.dark_hot_fraction, u.one)
+    hot_factor = _number(hot_factor, knobs.dark_hot_factor, u.one)
     check_quantity(level, u.electron, "level")
     lvl = float(level.to_value(u.electron))
     if not np.isfinite(lvl) or lvl < 0:
@@ -295,7 +296,7 @@ def read_dark(path, unit=None):
     return check_quantity(data * u.Unit(unit), u.electron, "dark").to(u.electron)
 
 
-def normalise_flat(flat, shape):
+def normalise_flat(flat, shape, n_planes=6):
     """
     Check a flat field and normalise each plane by its median.
 
@@ -303,9 +304,11 @@ def normalise_flat(flat, shape):
     ----------
     flat : array_like, dimensionless `~astropy.units.Quantity`, str or path-like
         Multiplicative gain map, shape (ny, nx) (the same for all planes) or
-        (6, ny, nx); a path is read with `read_flat`.
+        (n_planes, ny, nx); a path is read with `read_flat`.
     shape : tuple of int
         (ny, nx) of the detector.
+    n_planes : int
+        The instrument's number of raw planes K (GONG's 6 by default).
 
     Returns
     -------
@@ -332,16 +335,16 @@ def normalise_flat(flat, shape):
             raise u.UnitsError(f"flat must be dimensionless, got unit {flat.unit}")
         flat = flat.to_value(u.one)
     flat = np.asarray(flat, dtype=np.float64)
-    if flat.shape not in ((ny, nx), (N_PLANES, ny, nx)):
-        raise ValueError(f"flat must have shape {(ny, nx)} or {(N_PLANES, ny, nx)}, got {flat.shape}")
+    if flat.shape not in ((ny, nx), (n_planes, ny, nx)):
+        raise ValueError(f"flat must have shape {(ny, nx)} or {(n_planes, ny, nx)}, got {flat.shape}")
     check_finite(flat, "flat")
     bad = int(np.count_nonzero(flat <= 0))
     if bad:
         raise ValueError(f"flat must be strictly positive (it multiplies the signal and is "
                          f"divided out in the reduction); it has {bad} zero or negative pixel(s)")
     if flat.ndim == 2:
-        return np.broadcast_to(flat / np.median(flat), (N_PLANES, ny, nx))
-    return flat / np.median(flat.reshape(N_PLANES, -1), axis=1)[:, None, None]
+        return np.broadcast_to(flat / np.median(flat), (n_planes, ny, nx))
+    return flat / np.median(flat.reshape(n_planes, -1), axis=1)[:, None, None]
 
 
 def prepare_dark(dark, shape):

@@ -1,8 +1,9 @@
 r"""
-The GONG camera: frames accumulated into the six raw planes.
+The camera: frames accumulated into the instrument's K raw planes.
 
 The paper's time integration (Sec. 3.2, second list), for every frame *k* of
-the schedule (`gongsynth.stages.camera.schedule`) and every pixel:
+the instrument's schedule (`~gongsynth.instruments.base.FrameSchedule`: GONG's
+in `gongsynth.instruments.gong.schedule`) and every pixel:
 
 .. math::
 
@@ -15,10 +16,11 @@ the schedule (`gongsynth.stages.camera.schedule`) and every pixel:
 with E the expected electrons per frame (after QE, from the optics), f the
 median-normalised flat, D the dark current per frame (the photon and dark
 Poisson draws are merged: a sum of independent Poisson variates is Poisson),
-g the gain (33 e⁻/adu), σ_r the read noise (4.8 adu), z standard normal,
-d_k the dither and b = ``truncate_bits`` (3).  The last two terms are the
-bookkeeping of design §3.11: the exact dither of the plane is removed, and the
-mean −(2^b−1)/2^(b+1) bias of dropping b low bits (uniformly distributed
+g the gain (GONG: 33 e⁻/adu), σ_r the read noise (GONG: 4.8 adu), z standard
+normal, d_k the dither (zero for an instrument without) and b =
+``truncate_bits`` (GONG: 3; 0 for an instrument that keeps every bit).  The
+last two terms are the bookkeeping of design §3.11: the exact dither of the
+plane is removed, and the mean −(2^b−1)/2^(b+1) bias of dropping b low bits (uniformly distributed
 because σ_r ≫ 1 adu) is put back, so that ``raw`` is an unbiased estimate of
 Σ(f E + D)/g / 2^b in DN (1 DN = 2^b adu) and the reduction's dark subtraction
 (N_p D / g / 2^b) is exact.
@@ -39,7 +41,7 @@ Two engines, one interface:
     whose final rounding supplies the last 1/12.  Both engines agree in mean
     and variance of every plane (tested).
 
-Both accept time-varying input: ``expected`` of shape (n_snap, 6, ny, nx)
+Both accept time-varying input: ``expected`` of shape (n_snap, K, ny, nx)
 holds n_snap snapshots spread evenly over the duration; frame *k* sees
 snapshot ⌊k·n_snap/N⌋.
 """
@@ -51,12 +53,10 @@ import astropy.units as u
 import numpy as np
 from astropy.io import fits
 
+from gongsynth import instruments
 from gongsynth.files import atomic_path
-from gongsynth.instrument import resolve_instrument
-from gongsynth.planes import N_PLANES, PLANE_NAMES
 from gongsynth.seeding import as_seed_sequence, child_sequence, stage_generator
 from gongsynth.stages.camera.detector import normalise_flat, prepare_dark, synthetic_dark, synthetic_flat
-from gongsynth.stages.camera.schedule import frame_schedule
 from gongsynth.validation import check_quantity
 
 __all__ = ["RawPlanes", "integrate", "ENGINES", "snapshot_index"]
@@ -72,20 +72,21 @@ _BLOCKS_CHUNK_PIXELS = 1 << 17
 @dataclass(eq=False)
 class RawPlanes:
     """
-    Six accumulated GONG planes, as the camera writes them.
+    The K accumulated planes of an instrument, as the camera writes them.
 
     Attributes
     ----------
     data : `numpy.ndarray`
-        float64, shape (6, ny, nx), in DN (1 DN = 2**truncate_bits adu) after
-        truncation and mean-dither subtraction; plane order of `gongsynth.planes`.
+        float64, shape (K, ny, nx), in DN (1 DN = 2**truncate_bits adu) after
+        truncation and mean-dither subtraction; the instrument's plane order
+        (GONG: `gongsynth.planes`).
     frames_per_plane : `numpy.ndarray`
-        int64, shape (6,): frames accumulated in each plane.
+        int64, shape (K,): frames accumulated in each plane.
     header : `astropy.io.fits.Header`
-        GONG raw-like header (ACCUM, COUNT, ITIME, EXPTIME, ENGINE, SEED,
-        GSVERS, ...).  Never claims DTYPE = 'OBSERVE'.
+        Raw-like header (ITIME, EXPTIME, ENGINE, SEED, GSVERS, PLANEn, ...; GONG's
+        ACCUM and COUNT).  Never claims DTYPE = 'OBSERVE'.
     flat : `numpy.ndarray`
-        float64, shape (6, ny, nx): the median-normalised flat that was applied.
+        float64, shape (K, ny, nx): the median-normalised flat that was applied.
     dark : `~astropy.units.Quantity`
         Shape (ny, nx): the dark current that was applied, electron per frame.
     """
@@ -115,8 +116,8 @@ class RawPlanes:
         """
         Write the planes, the flat and the dark to a FITS file, atomically.
 
-        The primary HDU holds ``data`` (6, ny, nx) with ``header``; extension
-        ``FLAT`` the flat (ny, nx) or (6, ny, nx); ``DARK`` the dark (electron).
+        The primary HDU holds ``data`` (K, ny, nx) with ``header``; extension
+        ``FLAT`` the flat (ny, nx) or (K, ny, nx); ``DARK`` the dark (electron).
 
         Parameters
         ----------
@@ -158,12 +159,12 @@ class RawPlanes:
             data = np.array(hdul[0].data, dtype=np.float64)
             flat = np.array(hdul["FLAT"].data, dtype=np.float64)
             dark = np.array(hdul["DARK"].data, dtype=np.float64) * u.electron
-        if data.ndim != 3 or data.shape[0] != N_PLANES:
-            raise ValueError(f"{os.fspath(path)!r}: primary HDU must hold (6, ny, nx) planes, "
-                             f"got shape {data.shape}")
-        frames = np.array([header[f"NFRAME{p}"] for p in range(N_PLANES)], dtype=np.int64)
+        if data.ndim != 3 or any(f"NFRAME{p}" not in header for p in range(data.shape[0])):
+            raise ValueError(f"{os.fspath(path)!r}: primary HDU must hold (K, ny, nx) planes with "
+                             f"NFRAME0 ... NFRAME(K-1) in its header, got shape {data.shape}")
+        frames = np.array([header[f"NFRAME{p}"] for p in range(data.shape[0])], dtype=np.int64)
         return cls(data=data, frames_per_plane=frames, header=header,
-                   flat=normalise_flat(flat, data.shape[1:]), dark=dark)
+                   flat=normalise_flat(flat, data.shape[1:], data.shape[0]), dark=dark)
 
 
 def _same_planes(flat):
@@ -197,15 +198,15 @@ def snapshot_index(n_frames, n_snapshots):
     return np.arange(n_frames, dtype=np.int64) * n_snapshots // n_frames
 
 
-def _check_expected(expected):
+def _check_expected(expected, n_planes):
     check_quantity(expected, u.electron, "expected")
     values = np.asarray(expected.to_value(u.electron), dtype=np.float64)
     if values.ndim == 3:
         values = values[None]
-    if values.ndim != 4 or values.shape[1] != N_PLANES or min(values.shape) < 1:
+    if values.ndim != 4 or values.shape[1] != n_planes or min(values.shape) < 1:
         raise ValueError(
-            f"expected must have shape (6, ny, nx) or (n_snapshots, 6, ny, nx) "
-            f"(electrons per frame in each plane), got {expected.shape}")
+            f"expected must have shape ({n_planes}, ny, nx) or (n_snapshots, {n_planes}, ny, nx) "
+            f"(electrons per frame in each of the instrument's planes), got {expected.shape}")
     finite = np.isfinite(values)
     if not finite.all():
         raise ValueError(f"expected contains {int((~finite).sum())} non-finite value(s) (NaN or inf)")
@@ -237,13 +238,13 @@ def _progress(total, enabled, engine):
     return tqdm(total=total, disable=not enabled, desc=f"camera ({engine})", unit="row")
 
 
-def _flat_map(flat, shape, inst):
-    """(source label, median-normalised (6, ny, nx) flat) for the ``flat`` argument of `integrate`."""
+def _flat_map(flat, shape, inst, n_planes):
+    """(source label, median-normalised (K, ny, nx) flat) for the ``flat`` argument of `integrate`."""
     if flat is None or flat is True:
-        return "synthetic", normalise_flat(synthetic_flat(shape, instrument=inst), shape)
+        return "synthetic", normalise_flat(synthetic_flat(shape, instrument=inst), shape, n_planes)
     if flat is False:
-        return "none", normalise_flat(np.ones(shape), shape)
-    return "user", normalise_flat(flat, shape)
+        return "none", normalise_flat(np.ones(shape), shape, n_planes)
+    return "user", normalise_flat(flat, shape, n_planes)
 
 
 def _dark_map(dark, shape, inst):
@@ -265,13 +266,13 @@ def integrate(expected, *, duration=10 * u.min, engine="blocks", seed=None, inst
               flat=None, dark=None, photon_noise=True, read_noise=True, dither=True, truncation=True,
               chunk_rows=None, workers=None, progress=True):
     """
-    Accumulate a GONG observation into the six raw planes.
+    Accumulate an observation into the instrument's K raw planes.
 
     Parameters
     ----------
     expected : `~astropy.units.Quantity`
         Expected electrons per frame per pixel in each plane (after QE), shape
-        (6, ny, nx), or (n_snap, 6, ny, nx) for an input that changes during
+        (K, ny, nx), or (n_snap, K, ny, nx) for an input that changes during
         the observation (snapshots spread evenly over ``duration``; see
         `snapshot_index`).  Finite and non-negative.
     duration : `~astropy.units.Quantity`
@@ -282,13 +283,14 @@ def integrate(expected, *, duration=10 * u.min, engine="blocks", seed=None, inst
         equivalent); ``"frames"`` simulates every frame.  See `ENGINES`.
     seed : None, int, `numpy.random.SeedSequence` or `numpy.random.Generator`
         Root seed; its entropy is written to the header.
-    instrument : `~gongsynth.GONGInstrument`, optional
-        Supplies the schedule, gain, read noise, dither, truncation and the
-        synthetic flat and dark.
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
+        Supplies the schedule (`~gongsynth.instruments.base.Instrument.schedule`:
+        planes and dither), gain, read noise, truncation and the synthetic flat
+        and dark.  Default GONG.
     flat : None, bool, array_like, str or path-like
         ``None`` or ``True`` (default): the instrument's
         `~gongsynth.stages.camera.detector.synthetic_flat`; ``False``: a unity
-        flat (a perfect detector); an array (ny, nx) or (6, ny, nx), or a FITS
+        flat (a perfect detector); an array (ny, nx) or (K, ny, nx), or a FITS
         path: a user flat, median-normalised per plane inside.
     dark : None, bool, `~astropy.units.Quantity`, str or path-like
         ``None`` or ``True`` (default): the instrument's
@@ -309,7 +311,8 @@ def integrate(expected, *, duration=10 * u.min, engine="blocks", seed=None, inst
         per-frame rounding exactly.
     dither : bool
         Add the dither sequence to the frames (and remove its exact sum from
-        each plane; default).  False: no dither (DITHSUM = 0 in the header).
+        each plane; default).  False: no dither (DITHSUM = 0 in the header).  An
+        instrument without dither (an all-zero schedule) has no DITHSUM cards.
     truncation : bool
         Drop the ``truncate_bits`` lowest bits of each accumulated plane and
         put back the mean bias of doing so (default).  False: keep every bit;
@@ -358,18 +361,18 @@ def integrate(expected, *, duration=10 * u.min, engine="blocks", seed=None, inst
     >>> bool(np.all(exact.data == 600 * 1000 / 8))
     True
     """
-    inst = resolve_instrument(instrument)
+    inst = instruments.get(instrument)
     if engine not in ENGINES:
         raise ValueError(f"engine must be one of {ENGINES}, got {engine!r}")
     effects = {name: _switch(value, name) for name, value in (
         ("photon_noise", photon_noise), ("read_noise", read_noise), ("dither", dither),
         ("truncation", truncation))}
-    values = _check_expected(expected)
+    schedule = inst.schedule(duration)
+    values = _check_expected(expected, schedule.n_planes)
     n_snap, _, ny, nx = values.shape
-    schedule = frame_schedule(duration, inst)
     snap = snapshot_index(schedule.n_frames, n_snap)
     root = as_seed_sequence(seed)
-    flat_source, flat = _flat_map(flat, (ny, nx), inst)
+    flat_source, flat = _flat_map(flat, (ny, nx), inst, schedule.n_planes)
     dark_source, dark = _dark_map(dark, (ny, nx), inst)
     gain = inst.gain.to_value(u.electron / u.adu)
     sigma = inst.read_noise.to_value(u.adu)
@@ -431,7 +434,8 @@ def _run_frames(values, flat, dark, schedule, snap, dither, gain, sigma, photon,
     seg_start, seg_snap = _frame_segments(schedule, snap)
     plane = schedule.plane.astype(np.int64)
     key0, key1 = child_sequence(root, "camera-frames").generate_state(2, dtype=np.uint64)
-    sums = np.empty((N_PLANES, ny, nx), dtype=np.int64)
+    n_planes = schedule.n_planes
+    sums = np.empty((n_planes, ny, nx), dtype=np.int64)
     previous = numba.get_num_threads()
     numba.set_num_threads(min(workers, numba.config.NUMBA_NUM_THREADS))
     try:
@@ -439,11 +443,11 @@ def _run_frames(values, flat, dark, schedule, snap, dither, gain, sigma, photon,
             for r0, r1 in _chunks(ny, nx, chunk_rows, _FRAMES_CHUNK_PIXELS):
                 npix = (r1 - r0) * nx
                 lam = (values[:, :, r0:r1] * flat[None, :, r0:r1] + dark[r0:r1]).reshape(
-                    n_snap, N_PLANES, npix)
-                out = np.empty((N_PLANES, npix), dtype=np.int64)
+                    n_snap, n_planes, npix)
+                out = np.empty((n_planes, npix), dtype=np.int64)
                 frames_kernel(lam, seg_start, seg_snap, plane, dither, 1.0 / gain, sigma, photon,
                               key0, key1, np.int64(r0 * nx), out)
-                sums[:, r0:r1] = out.reshape(N_PLANES, r1 - r0, nx)
+                sums[:, r0:r1] = out.reshape(n_planes, r1 - r0, nx)
                 bar.update(r1 - r0)
     finally:
         numba.set_num_threads(previous)
@@ -451,8 +455,8 @@ def _run_frames(values, flat, dark, schedule, snap, dither, gain, sigma, photon,
 
 
 def _snapshot_counts(schedule, snap, n_snap):
-    """Frames of each (snapshot, plane), int64 (n_snap, 6)."""
-    counts = np.zeros((n_snap, N_PLANES), dtype=np.int64)
+    """Frames of each (snapshot, plane), int64 (n_snap, K)."""
+    counts = np.zeros((n_snap, schedule.n_planes), dtype=np.int64)
     np.add.at(counts, (snap, schedule.plane), 1)
     return counts
 
@@ -468,7 +472,7 @@ def _exact_sums(values, flat, dark, schedule, snap, dither_sum, gain):
     """
     counts = _snapshot_counts(schedule, snap, values.shape[0])
     inv_gain = 1.0 / gain
-    sums = np.zeros((N_PLANES,) + values.shape[2:], dtype=np.int64)
+    sums = np.zeros(values.shape[1:], dtype=np.int64)
     for s, lam in enumerate(values):
         adu = np.floor((lam * flat + dark) * inv_gain + 0.5).astype(np.int64)
         sums += counts[s][:, None, None] * adu
@@ -483,7 +487,8 @@ def _run_blocks(values, flat, dark, schedule, snap, dither_sum, gain, sigma, pho
     frames = schedule.frames_per_plane.astype(np.float64)
     spread = np.sqrt(frames * sigma**2 + np.maximum(frames - 1, 0) / 12.0)[:, None]
     offset = dither_sum[:, None]
-    sums = np.empty((N_PLANES, ny, nx), dtype=np.int64)
+    n_planes = schedule.n_planes
+    sums = np.empty((n_planes, ny, nx), dtype=np.int64)
 
     def work(rows):
         r0, r1 = rows
@@ -493,7 +498,7 @@ def _run_blocks(values, flat, dark, schedule, snap, dither_sum, gain, sigma, pho
             # One generator per detector row: independent of chunking and threads.
             rng = stage_generator(root, "camera-blocks", row)
             total = rng.poisson(lam[:, row - r0]) if photon else lam[:, row - r0]
-            noise = rng.standard_normal((N_PLANES, nx))
+            noise = rng.standard_normal((n_planes, nx))
             sums[:, row] = np.floor(total / gain + spread * noise + 0.5).astype(np.int64) + offset
         return r1 - r0
 
@@ -515,8 +520,8 @@ def _header(schedule, engine, root, flat_source, dark_source, n_snap, inst, effe
     header = fits.Header()
     entropy = int(root.entropy)
     header["ORIGIN"] = ("gongsynth", "simulated data, not an observation")
-    header["DTYPE"] = ("SIMULATE", "synthetic GONG raw planes (never OBSERVE)")
-    header["IMTYPE"] = ("RAW", "six accumulated planes: I+V ch0-2, I-V ch0-2")
+    header["DTYPE"] = ("SIMULATE", f"synthetic {inst.label} raw planes (never OBSERVE)")
+    header["IMTYPE"] = ("RAW", f"{schedule.n_planes} accumulated planes, named by PLANEn")
     header["MAGNETO"] = (True, "magnetogram mode")
     header["BUNIT"] = ("DN", f"1 DN = 2**{inst.truncate_bits} adu, dither removed")
     header["GSVERS"] = (__version__, "gongsynth version")
@@ -526,10 +531,10 @@ def _header(schedule, engine, root, flat_source, dark_source, n_snap, inst, effe
         header["SEEDKEY"] = (" ".join(map(str, root.spawn_key)), "spawn key of the camera's SeedSequence")
     header["ITIME"] = (schedule.duration.to_value(u.s), "[s] observing time")
     header["EXPTIME"] = (inst.exposure_time.to_value(u.s), "[s] exposure of one frame")
-    header["FRAMERAT"] = (inst.frame_rate.to_value(u.Hz), "[Hz] camera frame rate")
+    header["FRAMERAT"] = ((schedule.n_frames / schedule.duration).to_value(u.Hz), "[Hz] camera frame rate")
     header["NFRAMES"] = (schedule.n_frames, "frames in the observation")
-    header["ACCUM"] = (schedule.accum, "integrations per image plane (per polarisation)")
-    header["COUNT"] = (schedule.waveplate_turns, "waveplate index pulses per integration")
+    for key, card in schedule.header_cards().items():  # the instrument's own counters (GONG: ACCUM, COUNT)
+        header[key] = card
     header["NSNAP"] = (n_snap, "input snapshots spread over the observation")
     header["GAIN"] = (inst.gain.to_value(u.electron / u.adu), "[e-/adu]")
     header["RDNOISE"] = (inst.read_noise.to_value(u.adu), "[adu] read noise per frame")
@@ -544,8 +549,9 @@ def _header(schedule, engine, root, flat_source, dark_source, n_snap, inst, effe
     header["TRUNCATE"] = (effects["truncation"], "low bits dropped after accumulation")
     header["FLATSRC"] = (flat_source, "flat field: synthetic default, user or none")
     header["DARKSRC"] = (dark_source, "dark map: synthetic default, user or none")
-    for p in range(N_PLANES):
-        header[f"PLANE{p}"] = (PLANE_NAMES[p], f"plane {p}")
+    for p in range(schedule.n_planes):
+        header[f"PLANE{p}"] = (inst.plane_names[p], f"plane {p}")
         header[f"NFRAME{p}"] = (int(schedule.frames_per_plane[p]), f"frames in plane {p}")
-        header[f"DITHSUM{p}"] = (int(dither_sum[p]), f"[adu] dither summed in plane {p}")
+        if schedule.dither.value.any():  # an instrument without dither (HMI) records none
+            header[f"DITHSUM{p}"] = (int(dither_sum[p]), f"[adu] dither summed in plane {p}")
     return header

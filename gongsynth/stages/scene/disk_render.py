@@ -13,7 +13,6 @@ import astropy.units as u
 import numpy as np
 
 from gongsynth.geometry import as_obstime, pointing_centre, pointing_offset, wcs_header
-from gongsynth.planes import N_PLANES
 from gongsynth.seeding import as_seed_sequence
 from gongsynth.stages.channels import CHANNEL_UNIT
 from gongsynth.stages.scene.disk_kernel import cell_table, render_disk
@@ -53,7 +52,7 @@ def library_scene(library, *, obstime=None, instrument=None, detector_shape=None
     library : `~gongsynth.stages.scene.library.PatchLibrary`
     obstime : `~astropy.time.Time` or str, optional
         Observer at Earth; default `gongsynth.geometry.DEFAULT_OBSTIME`.
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
         Must be the one the library was built with (its filters are in the
         Doppler basis).
     detector_shape : int or (int, int), optional
@@ -98,8 +97,8 @@ def library_scene(library, *, obstime=None, instrument=None, detector_shape=None
     from sunpy.coordinates import get_earth, sun
     from sunpy.sun.constants import radius
 
-    from gongsynth.instrument import resolve_instrument
-    inst = resolve_instrument(instrument)
+    from gongsynth import instruments
+    inst = instruments.get(instrument)
     supersampling = inst.supersampling if supersampling is None else supersampling
     if isinstance(supersampling, bool) or not isinstance(supersampling, (int, np.integer)) \
             or supersampling < 1:
@@ -117,7 +116,7 @@ def library_scene(library, *, obstime=None, instrument=None, detector_shape=None
     large = large_scale_grid(time, surface_field, site=site, rotation=terms["rotation"],
                              observer=terms["observer"],
                              blueshift=CONVECTIVE_BLUESHIFT_FE6302 if terms["blueshift"] else None)
-    light = np.zeros((N_PLANES,) + grid, dtype=np.float32)
+    light = np.zeros((len(inst.analysers),) + grid, dtype=np.float32)
     blos = np.zeros(grid, dtype=np.float32)
     to_earth = radiance_at_earth(1 * CHANNEL_UNIT)
     basis = library.basis

@@ -30,9 +30,8 @@ import warnings
 import astropy.units as u
 import numpy as np
 
+from gongsynth import instruments
 from gongsynth.geometry import as_obstime, disk_geometry, pointing_centre, wcs_header
-from gongsynth.instrument import resolve_instrument
-from gongsynth.planes import N_PLANES
 from gongsynth.stages.channels import CHANNEL_UNIT
 from gongsynth.stages.scene.disk_render import library_scene
 from gongsynth.stages.scene.library import PatchLibrary
@@ -137,7 +136,7 @@ def full_disk_scene(source, *, obstime=None, instrument=None, detector_shape=Non
         beyond the cubes' μ range take the nearest cube, with a warning).
     obstime : `~astropy.time.Time` or str, optional
         Observer at Earth; default `gongsynth.geometry.DEFAULT_OBSTIME` (B0 ≈ 0).
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
     detector_shape : int or (int, int), optional
         Detector pixels; default ``instrument.detector_shape`` (860, GONG's field).
     supersampling : int, optional
@@ -195,7 +194,7 @@ def full_disk_scene(source, *, obstime=None, instrument=None, detector_shape=Non
     >>> light.shape, float(truth.data[12, 12].to_value(u.G)) > 99
     ((6, 24, 24), True)
     """
-    inst = resolve_instrument(instrument)
+    inst = instruments.get(instrument)
     if isinstance(source, PatchLibrary):
         if wavelength is not None or mueller is not None:
             raise ValueError("a PatchLibrary holds its spectral grid and Mueller matrix: give them to "
@@ -230,7 +229,7 @@ def full_disk_scene(source, *, obstime=None, instrument=None, detector_shape=Non
     pixel_km = engine.pixel_size.to_value(u.km)
     # float32, like the tiled scene: radiance at Earth stored once, converted from float64 planes.
     to_earth = radiance_at_earth(1 * CHANNEL_UNIT)
-    light = np.zeros((N_PLANES,) + grid, dtype=np.float32)
+    light = np.zeros((len(inst.analysers),) + grid, dtype=np.float32)
     blos = np.zeros(grid, dtype=np.float32)
     have_truth = True
     blocks = list(_row_blocks(grid[0], grid[1], chunk_size))

@@ -45,8 +45,8 @@ from pathlib import Path
 import astropy.units as u
 import numpy as np
 
+from gongsynth import instruments
 from gongsynth.files import fingerprint
-from gongsynth.instrument import resolve_instrument
 from gongsynth.seeding import as_seed_sequence, child_sequence
 from gongsynth.stages.scene.library_layout import library_layout
 from gongsynth.stages.scene.shifts import ShiftBasis
@@ -250,7 +250,7 @@ def build_library(*, seed=0, shape=(256, 256), pixel_size=384 * u.km, seeds_per_
         matrix that mixes Q or U into the analyser states sees them turned by
         the sample's position angle (I and V, all the identity uses, are not
         affected).
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
     line : `~gongsynth.sun.photosphere.NiLine`, optional
     max_velocity : `~astropy.units.Quantity`, optional
         Largest Doppler shift the scene may apply (see `gongsynth.stages.scene.shifts.shift_basis`).
@@ -335,9 +335,9 @@ def build_library(*, seed=0, shape=(256, 256), pixel_size=384 * u.km, seeds_per_
 _MEMO = {}
 # Modules whose code shapes the stored numbers: a change to any of them is a new library.
 _SOURCES = ("stages/scene/library.py", "stages/scene/library_layout.py", "stages/scene/shifts.py",
-            "stages/filters.py", "stages/channels.py", "sun/photosphere/model.py",
-            "sun/photosphere/synthesis.py", "sun/photosphere/_kernel.py", "sun/photosphere/line.py",
-            "sun/photosphere/columns.py")
+            "instruments/gong/filters.py", "instruments/quadrature.py", "stages/channels.py",
+            "sun/photosphere/model.py", "sun/photosphere/synthesis.py", "sun/photosphere/_kernel.py",
+            "sun/photosphere/line.py", "sun/photosphere/columns.py")
 # ... and of the 3-D Sun's library (folders: every module in them).
 _SOURCES_3D = ("stages/scene/library_rt.py", "sun/atmosphere.py", "sun/model_atmosphere", "sun/rt")
 _ARRAYS = ("patches", "uniform", "theta", "level_net")
@@ -371,7 +371,7 @@ _INSTRUMENT_KEYS = ("line_wavelength", "lande_g", "prefilter_center", "prefilter
 
 def _key(arguments, sun):
     arguments = dict(arguments, sun=sun)
-    inst = resolve_instrument(arguments.pop("instrument", None))
+    inst = instruments.get(arguments.pop("instrument", None))
     arguments["instrument"] = {name: getattr(inst, name) for name in _INSTRUMENT_KEYS}
     root = Path(__file__).resolve().parents[2]
     digest = hashlib.sha256()

@@ -13,7 +13,7 @@ from collections import namedtuple
 import astropy.units as u
 import numpy as np
 
-from gongsynth.instrument import resolve_instrument
+from gongsynth import instruments
 from gongsynth.stages.channels import analyser_coefficients
 from gongsynth.stages.scene.shifts import shift_basis
 from gongsynth.sun.photosphere import default_wavelength
@@ -172,7 +172,7 @@ def library_layout(*, instrument, wavelength, pixel_size, theta, seeds_per_level
     >>> lay.n_e, len(lay.weights), lay.k_row == (lay.n_e + 1) * (lay.basis.rank + 1) + 2
     (1, 2, True)
     """
-    inst = resolve_instrument(instrument)
+    inst = instruments.get(instrument)
     wavelength = default_wavelength() if wavelength is None else wavelength
     check_quantity(pixel_size, u.km, "pixel_size")
     theta = library_angles(theta)

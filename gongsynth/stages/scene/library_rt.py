@@ -152,7 +152,7 @@ def build_atmosphere_library(*, seed=0, shape=ATMOSPHERE_SHAPE, pixel_size=384 *
     mueller : array_like, optional
         A (4, 4) instrument Mueller matrix (default: identity), as in
         `gongsynth.stages.scene.library.build_library`.
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
     max_velocity : `~astropy.units.Quantity`, optional
         Largest Doppler shift the scene may apply.
     levels : sequence of (str, dict), optional

@@ -14,8 +14,8 @@ import math
 import astropy.units as u
 import numpy as np
 
+from gongsynth import instruments
 from gongsynth.geometry import wcs_header
-from gongsynth.instrument import resolve_instrument
 from gongsynth.validation import check_quantity
 
 __all__ = ["BOUNDARIES", "EARTH_RADIANCE_UNIT", "DeferredPlane", "DeferredStack", "Scene",
@@ -163,7 +163,7 @@ class Scene:
         Helioprojective WCS of the grid (`wcs_header`).
     boundary : {"periodic", "zero", "reflect"}
         Edge handling for the PSF (`gongsynth.stages.optics.convolve`).
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
     detector_shape : (int, int), optional
         The detector grid that covers the same field; default: the field
         divided by ``instrument.plate_scale``.
@@ -205,7 +205,7 @@ class Scene:
         self.pixel_scale = pixel_scale.to(u.arcsec)
         self.header = header
         self.boundary = boundary
-        self.instrument = resolve_instrument(instrument)
+        self.instrument = instruments.get(instrument)
         if detector_shape is None:
             ratio = (self.pixel_scale / self.instrument.plate_scale).to_value(u.one)
             detector_shape = tuple(int(round(n * ratio)) for n in data.shape[-2:])
@@ -259,7 +259,7 @@ class Scene:
 
         Parameters
         ----------
-        instrument : `~gongsynth.GONGInstrument`, optional
+        instrument : `~gongsynth.instruments.base.Instrument` or str, optional
             Unused (the scene knows its detector grid); accepted for symmetry.
 
         Returns
@@ -369,7 +369,7 @@ def sky_grid(instrument=None, *, detector_shape=None, shape=None):
 
     Parameters
     ----------
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
     detector_shape : int or (int, int), optional
         Detector pixels; default ``instrument.detector_shape`` (860).
     shape : int or (int, int), optional
@@ -389,7 +389,7 @@ def sky_grid(instrument=None, *, detector_shape=None, shape=None):
     >>> sky_grid(detector_shape=64)[:2]
     ((320, 320), <Quantity 0.5 arcsec>)
     """
-    inst = resolve_instrument(instrument)
+    inst = instruments.get(instrument)
     det = _pair(inst.detector_shape if detector_shape is None else detector_shape, "detector_shape")
     grid = (tuple(n * inst.supersampling for n in det) if shape is None
             else _pair(shape, "shape"))

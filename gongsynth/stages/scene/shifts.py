@@ -1,5 +1,5 @@
 r"""
-Doppler shifts in GONG's passband without re-synthesis: a low-rank basis of the shifted channel weights.
+Doppler shifts in an instrument's passband without re-synthesis: a low-rank basis of the shifted weights.
 
 A spectrum S(λ) moved by a line-of-sight velocity v (positive away from the
 observer) is S(λ / (1 + v/c)).  Its channel integrals are
@@ -11,7 +11,7 @@ observer) is S(λ / (1 + v/c)).  Its channel integrals are
            = \sum_j W_{cj}(v)\, S_j, \qquad \beta = v/c,
 
 i.e. the sampled spectrum against the filter responses moved the other way,
-with the quadrature of `gongsynth.stages.filters.channel_weights` (which
+with the quadrature of `gongsynth.instruments.quadrature.channel_weights` (which
 ``W(0)`` reproduces bit for bit).  Over a few km/s the family of rows
 ``W_c(v)`` spans few dimensions: the Michelson's cos ψ and sin ψ times the
 slowly varying prefilter and Lyot envelope.  `shift_basis` finds them once (a
@@ -34,9 +34,8 @@ import astropy.units as u
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from gongsynth.instrument import resolve_instrument
-from gongsynth.planes import N_CHANNELS
-from gongsynth.stages.filters import channel_responses, filter_quadrature
+from gongsynth import instruments
+from gongsynth.instruments.quadrature import filter_quadrature, hat_weights
 from gongsynth.validation import check_quantity, check_wavelength_grid
 
 __all__ = ["ShiftBasis", "shifted_channel_weights", "shift_basis"]
@@ -45,24 +44,18 @@ _C_KMS = const.c.to_value(u.km / u.s)
 _NODE_KMS = 0.2   # spacing of the exact weights (km/s); a cubic spline between errs by ~1e-6
 
 
-def _hat_weights(lam, grid):
-    """Linear-interpolation weights of every fine quadrature point onto the spectral grid."""
-    k = np.clip(np.searchsorted(lam, grid, side="right") - 1, 0, lam.size - 2)
-    t = np.clip((grid - lam[k]) / (lam[k + 1] - lam[k]), 0.0, 1.0)
-    return k, t
-
-
 def _shifted_weights(lam, velocities_kms, inst):
     """(nv, 3, nλ) weights of spectra sampled at ``lam`` (nm) moved by each velocity (km/s)."""
-    grid, dlam, _ = filter_quadrature(inst)
-    k, t = _hat_weights(lam, grid)
+    grid, dlam, unshifted = filter_quadrature(inst)
+    k, t = hat_weights(lam, grid)
+    n_filtergrams = unshifted.shape[0]
     factors = 1.0 + np.asarray(velocities_kms, dtype=float) / _C_KMS
     # One call for every shift: the responses at the moved quadrature points.
-    resp = channel_responses((factors[:, None] * grid[None, :]).ravel() * u.nm, inst).value
-    resp = resp.reshape(N_CHANNELS, factors.size, grid.size)
-    out = np.empty((factors.size, N_CHANNELS, lam.size))
+    resp = inst.responses((factors[:, None] * grid[None, :]).ravel() * u.nm).to_value(u.one)
+    resp = resp.reshape(n_filtergrams, factors.size, grid.size)
+    out = np.empty((factors.size, n_filtergrams, lam.size))
     for n, factor in enumerate(factors):
-        for i in range(N_CHANNELS):
+        for i in range(n_filtergrams):
             rw = resp[i, n] * dlam * factor
             out[n, i] = (np.bincount(k, rw * (1 - t), minlength=lam.size)
                          + np.bincount(k + 1, rw * t, minlength=lam.size))
@@ -79,12 +72,13 @@ def shifted_channel_weights(wavelength, velocity, instrument=None):
         The spectrum's sampling (strictly increasing, containing the line centre).
     velocity : `~astropy.units.Quantity`
         Line-of-sight velocity (positive: redshift), scalar.
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
 
     Returns
     -------
     `~astropy.units.Quantity`
-        (3, nλ) in nm: ``W @ S`` are the channel integrals of the shifted spectrum.
+        (n_filtergrams, nλ) in nm (GONG: 3): ``W @ S`` are the filtergram integrals
+        of the shifted spectrum.
 
     Examples
     --------
@@ -94,7 +88,7 @@ def shifted_channel_weights(wavelength, velocity, instrument=None):
     >>> bool(np.array_equal(shifted_channel_weights(lam, 0 * u.m / u.s), channel_weights(lam)))
     True
     """
-    inst = resolve_instrument(instrument)
+    inst = instruments.get(instrument)
     lam = check_wavelength_grid(wavelength, inst.line_wavelength, "wavelength").to_value(u.nm)
     check_quantity(velocity, u.km / u.s, "velocity")
     v = float(velocity.to_value(u.km / u.s))
@@ -203,7 +197,7 @@ def shift_basis(wavelength, instrument=None, *, max_velocity=4 * u.km / u.s, tol
     ----------
     wavelength : `~astropy.units.Quantity`
         The spectral grid of the spectra to be shifted.
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
     max_velocity : `~astropy.units.Quantity`
         Largest |v| (default 4 km/s: the solar rotation, the observer's motion
         and the convective blueshift together stay below ~3 km/s).
@@ -230,7 +224,7 @@ def shift_basis(wavelength, instrument=None, *, max_velocity=4 * u.km / u.s, tol
     >>> basis.rank, basis.error < 1e-4
     (10, True)
     """
-    inst = resolve_instrument(instrument)
+    inst = instruments.get(instrument)
     lam = check_wavelength_grid(wavelength, inst.line_wavelength, "wavelength").to_value(u.nm)
     vmax = float(check_quantity(max_velocity, u.km / u.s, "max_velocity").to_value(u.km / u.s))
     dv = float(check_quantity(step, u.km / u.s, "step").to_value(u.km / u.s))

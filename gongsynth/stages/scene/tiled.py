@@ -29,9 +29,8 @@ import numba
 import numpy as np
 import scipy.sparse
 
+from gongsynth import instruments
 from gongsynth.geometry import Pointing, wcs_header
-from gongsynth.instrument import resolve_instrument
-from gongsynth.planes import N_PLANES
 from gongsynth.stages.channels import CHANNEL_UNIT
 from gongsynth.stages.scene.scene import DeferredStack, Scene, radiance_at_earth, sky_grid
 from gongsynth.validation import check_finite, check_quantity
@@ -222,7 +221,7 @@ def check_tile_extent(shape, pixel_size, pointing, resolutions, instrument=None)
     ...
     ValueError: the tile (64×64 columns of pixel_size 1536 km) spans only 1.17″ × 134″ on the sky ...
     """
-    inst = resolve_instrument(instrument)
+    inst = instruments.get(instrument)
     plate = inst.plate_scale.to_value(u.arcsec)
     pix = pixel_size.to_value(u.km)
     mu = pointing.mu
@@ -256,7 +255,7 @@ def tile(stack, pixel_size: u.km, *, pointing=None, resolutions=(1, 2, 4, 8), in
     resolutions : sequence of 1 or 4 positive numbers
         Magnification of the tile in the whole field, or in the quadrants
         (bottom-left, bottom-right, top-left, top-right).  Default (1, 2, 4, 8).
-    instrument : `~gongsynth.GONGInstrument`, optional
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
     detector_shape, shape : int or (int, int), optional
         Detector pixels and supersampled grid (see `sky_grid`).
     dtype : {numpy.float64, numpy.float32}, optional
@@ -293,7 +292,7 @@ def tile(stack, pixel_size: u.km, *, pointing=None, resolutions=(1, 2, 4, 8), in
     if values.ndim != 3:
         raise ValueError(f"stack must have shape (k, ny, nx) or (ny, nx), got {np.shape(stack)}")
     check_finite(values, "stack")
-    inst = resolve_instrument(instrument)
+    inst = instruments.get(instrument)
     res = _check_resolutions(resolutions)
     grid, scale, det = sky_grid(inst, detector_shape=detector_shape, shape=shape)
     mu = pointing.mu
@@ -352,11 +351,13 @@ def tiled_scenes(channels, blos, pixel_size: u.km, *, pointing=None, resolutions
     >>> light.shape, truth.shape, light.detector_shape
     ((6, 160, 160), (160, 160), (32, 32))
     """
-    inst = resolve_instrument(instrument)
+    inst = instruments.get(instrument)
     pointing = Pointing() if pointing is None else pointing
     check_quantity(channels, CHANNEL_UNIT, "channels")
-    if channels.ndim != 3 or channels.shape[0] != N_PLANES:
-        raise ValueError(f"channels must have shape (6, ny, nx), got {channels.shape}")
+    n_planes = len(inst.analysers)
+    if channels.ndim != 3 or channels.shape[0] != n_planes:
+        raise ValueError(f"channels must have shape ({n_planes}, ny, nx) ({inst.label}'s planes), "
+                         f"got {channels.shape}")
     if blos is not None:
         check_quantity(blos, u.G, "blos")
         if blos.shape != channels.shape[1:]:

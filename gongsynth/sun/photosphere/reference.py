@@ -19,7 +19,7 @@ import warnings
 import astropy.units as u
 import numpy as np
 
-from gongsynth.instrument import GONGInstrument
+from gongsynth.instruments.gong.parameters import GONGInstrument
 from gongsynth.sun.rt.atomic_data import NiLineData
 from gongsynth.sun.rt.eos import solve_state
 from gongsynth.sun.stokes import RADIANCE_UNIT, StokesCube

@@ -24,8 +24,8 @@ import astropy.units as u
 import numpy as np
 from scipy.special import wofz
 
+from gongsynth import instruments
 from gongsynth.geometry import check_geometry, los_basis
-from gongsynth.instrument import GONGInstrument
 from gongsynth.sun.photosphere._kernel import me_kernel, me_project_kernel, voigt_table
 from gongsynth.sun.photosphere.columns import Photosphere
 from gongsynth.sun.photosphere.line import NiLine
@@ -37,9 +37,16 @@ __all__ = ["synthesize", "DeferredStokes", "default_wavelength", "zeeman_splitti
 _METHODS = ("numba", "numpy")
 
 
-def default_wavelength():
+def default_wavelength(instrument=None):
     """
-    The paper's spectral grid: 51 points from 676.73 to 676.83 nm.
+    The paper's spectral grid: 51 points from 676.73 to 676.83 nm (for GONG).
+
+    Parameters
+    ----------
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
+        Another instrument's line gets the same window moved to its
+        ``line_wavelength`` (±0.05 nm about it), sampled as finely as its
+        channel integrals need (`gongsynth.sun.sampling.spectral_requirement`).
 
     Returns
     -------
@@ -52,7 +59,17 @@ def default_wavelength():
     >>> lam.size, lam[0], lam[-1]
     (51, <Quantity 676.73 nm>, <Quantity 676.83 nm>)
     """
-    return np.linspace(676.73, 676.83, 51) * u.nm
+    from gongsynth.sun.sampling import spectral_requirement
+    inst = instruments.get(instrument)
+    # Halve the step until it is as fine as the instrument's channel integrals need
+    # (`gongsynth.sun.sampling`): GONG's 2 pm passes, HMI's narrower line needs 1 pm.
+    step = spectral_requirement(inst)[1].to_value(u.nm)
+    points = 51
+    while 0.1 / (points - 1) > step * (1 + 1e-6):
+        points = 2 * points - 1
+    # For GONG's 676.78 nm the shift is exactly 0: the paper's grid, bit for bit.
+    shift = inst.line_wavelength.to_value(u.nm) - 676.78
+    return (np.linspace(676.73, 676.83, points) + shift) * u.nm
 
 
 def zeeman_splitting(field, wavelength, lande_g):
@@ -211,13 +228,11 @@ def _checked_inputs(photosphere, mu, wavelength, los_azimuth, instrument, line, 
                         f"got {type(photosphere).__name__}")
     if method not in _METHODS:
         raise ValueError(f"method must be one of {_METHODS}, got {method!r}")
-    instrument = GONGInstrument() if instrument is None else instrument
-    if not isinstance(instrument, GONGInstrument):
-        raise TypeError(f"instrument must be a GONGInstrument or None, got {type(instrument).__name__}")
+    instrument = instruments.get(instrument)   # any of the family: its line's wavelength and Lande factor
     line = NiLine() if line is None else line
     if not isinstance(line, NiLine):
         raise TypeError(f"line must be a NiLine or None, got {type(line).__name__}")
-    wavelength = default_wavelength() if wavelength is None else wavelength
+    wavelength = default_wavelength(instrument) if wavelength is None else wavelength
     check_wavelength_grid(wavelength, instrument.line_wavelength)
     mu, azimuth = check_geometry(mu, los_azimuth, photosphere.shape)
     g = float(instrument.lande_g.to_value(u.one)) if line.lande_g is None else float(line.lande_g)

@@ -22,11 +22,11 @@ from dataclasses import dataclass
 import astropy.units as u
 import numpy as np
 
-from gongsynth.instrument import GONGInstrument, resolve_instrument
-from gongsynth.planes import N_CHANNELS, N_PLANES, N_POLARISATIONS
-from gongsynth.validation import check_finite, check_quantity
+from gongsynth.instruments.base import FrameSchedule, whole_frames
+from gongsynth.instruments.gong.parameters import GONGInstrument, resolve_instrument
+from gongsynth.instruments.gong.planes import N_CHANNELS, N_PLANES, N_POLARISATIONS
 
-__all__ = ["FrameSchedule", "frame_schedule", "dither_sequence", "n_frames_in"]
+__all__ = ["FrameSchedule", "GONGFrameSchedule", "frame_schedule", "dither_sequence", "n_frames_in"]
 
 
 def _whole(value, what):
@@ -58,14 +58,7 @@ def n_frames_in(duration, instrument=None):
     36000
     """
     inst = resolve_instrument(instrument)
-    check_quantity(duration, u.s, "duration")
-    if np.ndim(duration) != 0:
-        raise ValueError(f"duration must be a scalar, got shape {np.shape(duration)}")
-    check_finite(duration, "duration")
-    if duration <= 0 * u.s:
-        raise ValueError(f"duration must be positive, got {duration}")
-    return _whole((duration * inst.frame_rate).to_value(u.one),
-                  f"duration × frame_rate ({duration} × {inst.frame_rate})")
+    return whole_frames(duration, (1 / inst.frame_rate).to(u.s))
 
 
 def dither_sequence(n_frames, instrument=None):
@@ -115,14 +108,15 @@ def _whole_adu(value, name):
 
 
 @dataclass(frozen=True, eq=False)
-class FrameSchedule:
+class GONGFrameSchedule(FrameSchedule):
     """
-    What happens in every frame of an observation (one row per frame).
+    GONG's frames: the shared `~gongsynth.instruments.base.FrameSchedule` plus the wave plate and LCVR.
 
     Attributes
     ----------
-    time : `~astropy.units.Quantity`
-        Start of each frame's exposure since the start of the observation, s.
+    time, plane, dither, n_planes, duration
+        As in `~gongsynth.instruments.base.FrameSchedule` (plane =
+        ``polarisation * 3 + channel``; dither in adu).
     waveplate_angle : `~astropy.units.Quantity`
         Wave-plate angle at the start of each frame, deg in [0, 360).
     sector : `numpy.ndarray`
@@ -131,51 +125,15 @@ class FrameSchedule:
         Channel (sector mod 3), 0-2.
     polarisation : `numpy.ndarray`
         0 = I+V, 1 = I-V (LCVR state).
-    plane : `numpy.ndarray`
-        Accumulation plane, ``polarisation * 3 + channel``.
-    dither : `~astropy.units.Quantity`
-        Dither offset of each frame, adu.
     instrument : `~gongsynth.GONGInstrument`
         The instrument the schedule was made for.
     """
 
-    time: u.Quantity
     waveplate_angle: u.Quantity
     sector: np.ndarray
     channel: np.ndarray
     polarisation: np.ndarray
-    plane: np.ndarray
-    dither: u.Quantity
     instrument: GONGInstrument
-
-    def __len__(self):
-        return self.plane.size
-
-    @property
-    def n_frames(self):
-        """Number of frames (int)."""
-        return self.plane.size
-
-    @property
-    def duration(self):
-        """Total observing time, `~astropy.units.Quantity` in s."""
-        return (self.n_frames / self.instrument.frame_rate).to(u.s)
-
-    @property
-    def frames_per_plane(self):
-        """Number of frames accumulated on each of the 6 planes, int64 array (6,)."""
-        return np.bincount(self.plane, minlength=N_PLANES).astype(np.int64)
-
-    @property
-    def dither_sum(self):
-        """Sum of the dither over the frames of each plane, int64 array (6,) in ADU."""
-        d = self.dither.to_value(u.adu).astype(np.int64)
-        return np.bincount(self.plane, weights=d, minlength=N_PLANES).round().astype(np.int64)
-
-    @property
-    def mean_dither(self):
-        """Mean dither per frame of each plane, `~astropy.units.Quantity` (6,) in adu."""
-        return (self.dither_sum / np.maximum(self.frames_per_plane, 1)) * u.adu
 
     @property
     def accum(self):
@@ -186,6 +144,17 @@ class FrameSchedule:
     def waveplate_turns(self):
         """Completed wave-plate turns (GONG's COUNT keyword: 300 per minute)."""
         return int((self.n_frames * self.instrument.waveplate_step / (360 * u.deg)).to_value(u.one))
+
+    def header_cards(self):
+        """
+        GONG's raw-header counters ACCUM and COUNT.
+
+        Returns
+        -------
+        dict
+        """
+        return {"ACCUM": (self.accum, "integrations per image plane (per polarisation)"),
+                "COUNT": (self.waveplate_turns, "waveplate index pulses per integration")}
 
 
 def frame_schedule(duration=1 * u.min, instrument=None):
@@ -203,7 +172,7 @@ def frame_schedule(duration=1 * u.min, instrument=None):
 
     Returns
     -------
-    `FrameSchedule`
+    `GONGFrameSchedule`
 
     Raises
     ------
@@ -236,13 +205,15 @@ def frame_schedule(duration=1 * u.min, instrument=None):
     sector = k % sectors
     channel = sector % N_CHANNELS
     polarisation = (k // per_state) % N_POLARISATIONS
-    return FrameSchedule(
+    return GONGFrameSchedule(
         time=(k / inst.frame_rate).to(u.s),
+        plane=polarisation * N_CHANNELS + channel,
+        dither=dither_sequence(n, inst) * u.adu,
+        n_planes=N_PLANES,
+        duration=(n / inst.frame_rate).to(u.s),
         waveplate_angle=(sector * inst.waveplate_step).to(u.deg),
         sector=sector,
         channel=channel,
         polarisation=polarisation,
-        plane=polarisation * N_CHANNELS + channel,
-        dither=dither_sequence(n, inst) * u.adu,
         instrument=inst,
     )

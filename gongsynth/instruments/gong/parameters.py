@@ -1,5 +1,5 @@
 """
-The GONG instrument model: every parameter of the simulation in one place.
+The GONG instrument model: every parameter of GONG in one place.
 
 `GONGInstrument` is a frozen dataclass.  Each physical parameter is an
 `astropy.units.Quantity` whose default is the value given in Plowman & Berger,
@@ -10,41 +10,25 @@ other module of gongsynth holds an instrument parameter of its own.
 """
 from __future__ import annotations
 
-import dataclasses
 import math
-import numbers
-import tomllib
-from dataclasses import dataclass, field, fields
-from pathlib import Path
+from dataclasses import dataclass
+from typing import ClassVar
 
 import astropy.constants as const
 import astropy.units as u
-import tomlkit
 
-from gongsynth.tomlfmt import toml_table
+from gongsynth.instruments.base import InstrumentParameters
+from gongsynth.instruments.base import plain_field as _plain
+from gongsynth.instruments.base import quantity_field as _param
 
 __all__ = ["GONGInstrument", "PREFILTER_FORMS", "resolve_instrument"]
 
 #: Accepted values of `GONGInstrument.prefilter_form`.
 PREFILTER_FORMS = ("memo", "ideal")
 
-# Field metadata keys.
-_UNIT = "unit"
-_DOC = "doc"
 
-
-def _param(default, unit, doc):
-    """A Quantity-valued dataclass field with its canonical unit and source."""
-    return field(default=u.Quantity(default, unit), metadata={_UNIT: u.Unit(unit), _DOC: doc})
-
-
-def _plain(default, kind, doc):
-    """A plain (int or str) dataclass field."""
-    return field(default=default, metadata={_UNIT: kind, _DOC: doc})
-
-
-@dataclass(frozen=True)
-class GONGInstrument:
+@dataclass(frozen=True, eq=False)
+class GONGInstrument(InstrumentParameters):
     """
     Every parameter of the simulated GONG magnetograph.
 
@@ -254,27 +238,20 @@ class GONGInstrument:
                                          "synthetic dark: hot pixel current / dark_level")
     wrap_margin: u.Quantity = _param(0.3, u.rad, "reduction: wrap flag margin from +-pi (design 3.5)")
 
+    #: The registry key (`gongsynth.instruments.get`), the name in metadata, and the line
+    #: (the radiative-transfer line registry's key).
+    name: ClassVar[str] = "gong"
+    label: ClassVar[str] = "GONG"
+    line: ClassVar[str] = "Ni I 676.8"
+    #: GONG's reduction algorithm (`gongsynth.instruments.gong.reduction.three_phase`).
+    algorithm: ClassVar[str] = "gongsynth.instruments.gong.reduction:three_phase"
+
     def __post_init__(self):
-        for f in fields(self):
-            kind = f.metadata[_UNIT]
-            value = getattr(self, f.name)
-            if kind is int:
-                if isinstance(value, numbers.Integral) and not isinstance(value, bool):
-                    value = int(value)  # numpy integers too
-                    object.__setattr__(self, f.name, value)
-                if isinstance(value, bool) or not isinstance(value, int) or value < 0:
-                    raise TypeError(
-                        f"GONGInstrument.{f.name} must be a non-negative int, got {value!r}"
-                    )
-            elif kind is str:
-                if f.name == "prefilter_form" and value not in PREFILTER_FORMS:
-                    raise ValueError(
-                        f"GONGInstrument.prefilter_form must be one of {PREFILTER_FORMS}, got {value!r}"
-                    )
-            else:
-                object.__setattr__(self, f.name, _as_quantity(f.name, value, kind))
-        for name, interval in _RANGES.items():
-            _check_range(name, getattr(self, name), interval)
+        super().__post_init__()
+        if self.prefilter_form not in PREFILTER_FORMS:
+            raise ValueError(
+                f"GONGInstrument.prefilter_form must be one of {PREFILTER_FORMS}, got {self.prefilter_form!r}"
+            )
         for smaller, larger in (("flat_dust_depth_min", "flat_dust_depth_max"),
                                 ("flat_dust_radius_min", "flat_dust_radius_max")):
             if getattr(self, smaller) > getattr(self, larger):
@@ -329,193 +306,100 @@ class GONGInstrument:
         per_cm_s = 4 * math.pi * m_e * c / (e * g * lam)
         return (per_cm_s * 100) * u.G / (u.m / u.s)
 
-    # --------------------------------------------------------------- utilities
-    def replace(self, **changes):
+    # ------------------------------------------------------------ the protocol
+    @property
+    def analysers(self):
         """
-        Return a copy with some parameters changed.
+        The (sector, sign of Stokes V) pair of each raw plane, a tuple of int pairs.
+
+        Plane = polarisation × 3 + sector (`gongsynth.planes`), I+V first:
+        ``((0, 1), (1, 1), (2, 1), (0, -1), (1, -1), (2, -1))``.
+        """
+        from gongsynth.instruments.gong.planes import ANALYSERS
+        return ANALYSERS
+
+    @property
+    def plane_names(self):
+        """Short name of each raw plane (``"I+V ch0"`` ...), tuple of str."""
+        from gongsynth.instruments.gong.planes import PLANE_NAMES
+        return PLANE_NAMES
+
+    def responses(self, wavelength):
+        """
+        The three sector responses R̄_i(λ) (`gongsynth.filters.channel_responses`).
 
         Parameters
         ----------
-        **changes
-            Field names and their new values (Quantities with compatible units).
+        wavelength : `~astropy.units.Quantity`
+            Shape (nλ,).
 
         Returns
         -------
-        `GONGInstrument`
+        `~astropy.units.Quantity`
+            Dimensionless, shape (3, nλ).
         """
-        unknown = set(changes) - {f.name for f in fields(self)}
-        if unknown:
-            raise TypeError(f"GONGInstrument has no parameter(s) {sorted(unknown)}")
-        return dataclasses.replace(self, **changes)
+        from gongsynth.instruments.gong.filters import channel_responses
+        return channel_responses(wavelength, self)
 
-    def __eq__(self, other):
-        if not isinstance(other, GONGInstrument):
-            return NotImplemented
-        return self._key() == other._key()
-
-    def __hash__(self):
-        return hash(self._key())
-
-    def _key(self):
-        """A hashable tuple of (name, value, unit string) for every field."""
-        key = []
-        for f in fields(self):
-            value = getattr(self, f.name)
-            if isinstance(value, u.Quantity):
-                key.append((f.name, float(value.value), value.unit.to_string()))
-            else:
-                key.append((f.name, value))
-        return tuple(key)
-
-    def to_dict(self):
+    def schedule(self, duration):
         """
-        Every parameter as a TOML-ready value.
+        GONG's magnetogram-mode frame schedule (`gongsynth.instruments.gong.schedule.frame_schedule`).
 
-        Quantities become strings such as ``"676.78 nm"`` whose number is the
-        shortest repr that round-trips exactly; ints and strings stay as they are.
+        Parameters
+        ----------
+        duration : `~astropy.units.Quantity`
+
+        Returns
+        -------
+        `~gongsynth.instruments.gong.schedule.GONGFrameSchedule`
+        """
+        from gongsynth.instruments.gong.schedule import frame_schedule
+        return frame_schedule(duration, self)
+
+    @property
+    def detector_maps(self):
+        """The parameters of the synthetic flat and dark (GONG's own fields: the instrument itself)."""
+        return self
+
+    def header_cards(self):
+        """
+        The inversion constants every product records (Landé factor, v0).
 
         Returns
         -------
         dict
         """
-        out = {}
-        for f in fields(self):
-            value = getattr(self, f.name)
-            if isinstance(value, u.Quantity) and value.unit == u.dimensionless_unscaled:
-                out[f.name] = float(value.value)
-            elif isinstance(value, u.Quantity):
-                out[f.name] = f"{float(value.value)!r} {value.unit.to_string()}"
-            else:
-                out[f.name] = value
-        return out
-
-    @classmethod
-    def from_dict(cls, mapping, *, where="instrument"):
-        """
-        Build an instrument from a mapping such as a parsed TOML table.
-
-        Parameters
-        ----------
-        mapping : dict
-            Parameter names to values: Quantities, strings like ``"3.6 arcsec"``,
-            plain numbers for dimensionless parameters, ints and strings.
-        where : str
-            Name of the table, used in error messages.
-
-        Returns
-        -------
-        `GONGInstrument`
-
-        Raises
-        ------
-        KeyError
-            If a key is not a parameter of the instrument.
-        """
-        known = {f.name: f for f in fields(cls)}
-        unknown = [k for k in mapping if k not in known]
-        if unknown:
-            raise KeyError(
-                f"unknown key(s) {unknown} in [{where}]; valid keys are {sorted(known)}"
-            )
-        kwargs = {}
-        for key, value in mapping.items():
-            kind = known[key].metadata[_UNIT]
-            if isinstance(kind, u.UnitBase) and isinstance(value, str):
-                try:
-                    value = u.Quantity(value)
-                except (TypeError, ValueError) as exc:
-                    raise ValueError(
-                        f"[{where}] {key} = {value!r} is not a quantity such as '1.0 {kind}'"
-                    ) from exc
-            kwargs[key] = value
-        return cls(**kwargs)
-
-    def toml_table(self, *, comments=True):
-        """
-        The instrument as a tomlkit ``[instrument]`` table, each key under its documentation.
-
-        Parameters
-        ----------
-        comments : bool
-            Write the documentation comments.
-
-        Returns
-        -------
-        `tomlkit.items.Table`
-        """
-        values = self.to_dict()
-        return toml_table([(f.name, values[f.name], f.metadata[_DOC]) for f in fields(self)],
-                          comments=comments)
-
-    def to_toml(self):
-        """
-        The instrument as a TOML ``[instrument]`` table, one commented line each.
-
-        Returns
-        -------
-        str
-        """
-        doc = tomlkit.document()
-        doc.add("instrument", self.toml_table())
-        return tomlkit.dumps(doc)
-
-    @classmethod
-    def from_toml(cls, source):
-        """
-        Read an instrument from TOML text or a path to a TOML file.
-
-        The parameters may sit at top level or in an ``[instrument]`` table.
-
-        Parameters
-        ----------
-        source : str or `pathlib.Path`
-            TOML text, or a path to a ``.toml`` file.
-
-        Returns
-        -------
-        `GONGInstrument`
-        """
-        if isinstance(source, Path) or (isinstance(source, str) and source.endswith(".toml")
-                                        and "\n" not in source):
-            text = Path(source).read_text()
-        else:
-            text = source
-        table = tomllib.loads(text)
-        if "instrument" in table:
-            extra = [k for k in table if k != "instrument"]
-            if extra:
-                raise KeyError(f"unknown top-level key(s) {extra} next to [instrument]")
-            table = table["instrument"]
-        return cls.from_dict(table)
+        return {"landeg": (self.lande_g.to_value(u.one), "Lande factor used in the inversion"),
+                "v0": (self.v0.to_value(u.m / u.s / u.rad), "[m/s/rad] Michelson velocity scale")}
 
 
 def resolve_instrument(instrument):
     """
     The instrument a stage should use: the default GONG for None, else the one given.
 
+    Kept for the stages' old callers; the family's entry point is
+    `gongsynth.instruments.get`, which also takes a name.
+
     Parameters
     ----------
-    instrument : `GONGInstrument` or None
+    instrument : `~gongsynth.instruments.base.Instrument`, str or None
 
     Returns
     -------
-    `GONGInstrument`
+    An instrument of the family.
 
     Raises
     ------
     TypeError
-        If ``instrument`` is neither None nor a `GONGInstrument`.
+        If ``instrument`` is neither None, a name nor an instrument.
 
     Examples
     --------
     >>> resolve_instrument(None) == GONGInstrument()
     True
     """
-    if instrument is None:
-        return GONGInstrument()
-    if not isinstance(instrument, GONGInstrument):
-        raise TypeError(f"instrument must be a GONGInstrument or None, got {type(instrument).__name__}")
-    return instrument
+    from gongsynth.instruments import get
+    return get(instrument)
 
 
 #: Allowed range of each numeric field in its canonical unit, as an interval ("[" and "]" inclusive).
@@ -534,36 +418,4 @@ _RANGES = {
     "lande_g": "(0, 4]", "truncate_bits": "[0, 31]", "wrap_margin": "[0, pi)",
 }
 
-
-def _check_range(name, value, interval):
-    """Raise ValueError naming the field unless ``value`` (in its canonical unit) lies in ``interval``."""
-    unit = _FIELD_UNITS[name]
-    number = value if isinstance(value, int) else float(value.to_value(unit))
-    low, high = (float(x.replace("pi", str(math.pi))) for x in interval[1:-1].split(","))
-    if (number < low or number > high or (interval[0] == "(" and number == low)
-            or (interval[-1] == ")" and number == high)):
-        shown = value if isinstance(value, int) else value.to(unit)
-        unit_text = "" if isinstance(value, int) or unit == u.one else f" {unit}"
-        raise ValueError(f"GONGInstrument.{name} must lie in {interval}{unit_text}, got {shown}")
-
-
-def _as_quantity(name, value, unit):
-    """Check that ``value`` is a Quantity convertible to ``unit`` (or a number if dimensionless)."""
-    if not isinstance(value, u.Quantity):
-        if unit == u.dimensionless_unscaled and isinstance(value, (int, float)) \
-                and not isinstance(value, bool):
-            return u.Quantity(float(value))
-        raise TypeError(
-            f"GONGInstrument.{name} must be an astropy Quantity in units of {unit} "
-            f"(e.g. {name}=1.0 * u.Unit('{unit}')), got {value!r}"
-        )
-    if not value.unit.is_equivalent(unit):
-        raise u.UnitsError(
-            f"GONGInstrument.{name} must have units convertible to '{unit}', got '{value.unit}'"
-        )
-    if value.ndim != 0 or not math.isfinite(float(value.value)):
-        raise ValueError(f"GONGInstrument.{name} must be a finite scalar, got {value!r}")
-    return value
-
-
-_FIELD_UNITS = {f.name: f.metadata[_UNIT] for f in fields(GONGInstrument)}
+GONGInstrument.RANGES = _RANGES

@@ -1,6 +1,10 @@
 r"""
 The GONG filter chain: prefilter, Lyot, Michelson and rotating half-wave plate.
 
+(Also ``gongsynth.filters``, the path promised in DESIGN §2, and the old
+``gongsynth.stages.filters``; `channel_weights` and `filter_quadrature`, which
+serve every instrument, live in `gongsynth.instruments.quadrature`.)
+
 The transmission for a wave-plate angle :math:`\theta_w` is (paper Eq. 4 with
 design §3.1: a half-wave plate rotates polarisation by twice its angle)
 
@@ -23,15 +27,15 @@ with :math:`\psi = 2\pi\lambda_0^2/(\Delta\lambda_m\lambda)` and
 modulation phase and the pattern repeats every 90° of wave-plate rotation.
 """
 
-import functools
 import math
 
 import astropy.units as u
 import numpy as np
 
-from gongsynth.instrument import resolve_instrument
-from gongsynth.planes import N_CHANNELS
-from gongsynth.validation import check_quantity, check_wavelength_grid
+from gongsynth.instruments.gong.parameters import resolve_instrument
+from gongsynth.instruments.gong.planes import N_CHANNELS
+from gongsynth.instruments.quadrature import channel_weights, filter_quadrature
+from gongsynth.validation import check_quantity
 
 __all__ = [
     "prefilter_transmission",
@@ -254,77 +258,3 @@ def channel_responses(wavelength: u.nm, instrument=None):
     if lam.ndim != 1:
         raise ValueError(f"wavelength must be one-dimensional, got shape {lam.shape}")
     return u.Quantity(_sector_responses(lam, resolve_instrument(instrument)), u.one)
-
-
-@functools.lru_cache(maxsize=32)
-def filter_quadrature(inst):
-    """
-    The fine quadrature of the filter chain (cached per instrument).
-
-    Parameters
-    ----------
-    inst : `~gongsynth.GONGInstrument`
-
-    Returns
-    -------
-    grid : `numpy.ndarray`
-        Wavelengths in nm: λ0 ± ``integration_half_width`` every ``quadrature_step``.
-    dlam : `numpy.ndarray`
-        Trapezoid weights in nm.
-    responses : `numpy.ndarray`
-        (3, n) sector responses R̄_i on the grid.
-    """
-    lam0 = inst.line_wavelength.to_value(u.nm)
-    half = inst.integration_half_width.to_value(u.nm)
-    step = inst.quadrature_step.to_value(u.nm)
-    n = int(math.ceil(2 * half / step)) + 1
-    grid = np.linspace(lam0 - half, lam0 + half, n)
-    dlam = np.full(n, grid[1] - grid[0])
-    dlam[[0, -1]] /= 2
-    return grid, dlam, _sector_responses(grid, inst)
-
-
-@u.quantity_input
-def channel_weights(wavelength: u.nm, instrument=None):
-    r"""
-    Quadrature weights that integrate a sampled spectrum against each channel.
-
-    For a spectrum :math:`S_j` sampled at ``wavelength`` (any, possibly
-    non-uniform, increasing grid), :math:`\sum_j W_{ij} S_j = \int \bar R_i(\lambda)
-    S(\lambda)\,d\lambda`, where :math:`S(\lambda)` is the piecewise-linear
-    interpolant of the samples, extended by its edge values (the continuum) out
-    to :math:`\lambda_0 \pm` ``integration_half_width`` (design §3.8).
-
-    Parameters
-    ----------
-    wavelength : `~astropy.units.Quantity`
-        Strictly increasing wavelengths, shape (nλ,), nλ ≥ 2, that must contain
-        the line centre.
-    instrument : `~gongsynth.GONGInstrument`, optional
-
-    Returns
-    -------
-    `~astropy.units.Quantity`
-        Shape (3, nλ), in nm: ``W @ S`` has the units of the spectrum times nm.
-
-    Examples
-    --------
-    >>> import astropy.units as u
-    >>> import numpy as np
-    >>> lam = np.linspace(676.73, 676.83, 51) * u.nm
-    >>> w = channel_weights(lam)
-    >>> w.shape, w.unit
-    ((3, 51), Unit("nm"))
-    """
-    inst = resolve_instrument(instrument)
-    lam = check_wavelength_grid(wavelength, inst.line_wavelength, "wavelength").to_value(u.nm)
-    grid, dlam, resp = filter_quadrature(inst)
-    # Hat-function interpolation weights of every fine point onto the input grid.
-    k = np.clip(np.searchsorted(lam, grid, side="right") - 1, 0, lam.size - 2)
-    t = np.clip((grid - lam[k]) / (lam[k + 1] - lam[k]), 0.0, 1.0)
-    weights = np.empty((N_CHANNELS, lam.size))
-    for i in range(N_CHANNELS):
-        rw = resp[i] * dlam
-        weights[i] = (np.bincount(k, rw * (1 - t), minlength=lam.size)
-                      + np.bincount(k + 1, rw * t, minlength=lam.size))
-    return u.Quantity(weights, u.nm)

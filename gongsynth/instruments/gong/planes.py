@@ -7,7 +7,7 @@ array of planes in gongsynth has a leading axis of length 6 in this order::
 
     index = polarisation * 3 + channel,   polarisation 0 = I+V, 1 = I-V
 """
-__all__ = ["N_CHANNELS", "N_POLARISATIONS", "N_PLANES", "POLARISATIONS", "PLANE_NAMES",
+__all__ = ["N_CHANNELS", "N_POLARISATIONS", "N_PLANES", "POLARISATIONS", "PLANE_NAMES", "ANALYSERS",
            "plane_index"]
 
 N_CHANNELS = 3
@@ -17,6 +17,8 @@ N_PLANES = N_CHANNELS * N_POLARISATIONS
 POLARISATIONS = ("I+V", "I-V")
 #: Human-readable plane names, in plane order.
 PLANE_NAMES = tuple(f"{p} ch{c}" for p in POLARISATIONS for c in range(N_CHANNELS))
+#: (sector, sign of V) of each plane, in plane order (`gongsynth.instruments.base.Instrument.analysers`).
+ANALYSERS = tuple((c, sign) for sign in (1, -1) for c in range(N_CHANNELS))
 
 
 def plane_index(polarisation, channel):
