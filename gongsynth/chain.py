@@ -447,17 +447,14 @@ def unmeasured(expected_counts, config, *, instrument=None, obstime=None):
     `numpy.ndarray` of bool
         (ny, nx), True where the products are blanked.
     """
-    from gongsynth.stages.camera.schedule import n_frames_in
-
     light = expected_counts.sum(axis=0).value
-    inst = config.instrument
-    frames = n_frames_in(config.duration, inst)
+    inst = instruments.get(config.instrument if instrument is None else instrument)
+    frames = int(np.sum(inst.schedule(config.duration).frames_per_plane))
     signal = light / expected_counts.shape[0] * frames          # each frame goes to one of the planes
     read = (inst.read_noise * inst.gain).to_value(u.electron) if config.effects.read_noise else 0.0
     faint = (light < SKY_FRACTION * light.max()) | (signal <= np.sqrt(signal + frames * read**2))
     if config.mode != "full-disk":
         return faint
-    inst = instruments.get(config.instrument if instrument is None else instrument)
     off_disk = ~disk_geometry(light.shape, inst.plate_scale,
                               obstime=config.obstime if obstime is None else obstime,
                               pointing=config.pointing).on_disk

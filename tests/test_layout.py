@@ -46,7 +46,11 @@ LAYERS = (
 )
 
 #: Modules allowed to exceed MAX_LINES, and why.
-LONG_MODULES = {}
+LONG_MODULES = {
+    # One job, the run's configuration: the dataclass, its TOML round trip and the checks that
+    # refuse a run before any computing (issue 28).  To split next: the checks into their own module.
+    "gongsynth.config": "the run configuration and its before-computing checks",
+}
 
 MAX_LINES = 600
 
