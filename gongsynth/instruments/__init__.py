@@ -1,5 +1,5 @@
 """
-The instrument family: GONG and HMI (and MDI) behind one protocol.
+The instrument family: GONG, HMI and MDI behind one protocol.
 
 Each instrument is a frozen dataclass of its parameters in its own subpackage
 (`gongsynth.instruments.gong`, ...) that implements the protocol of
@@ -13,7 +13,7 @@ for its instrument once, by name or as an object:
 >>> instruments.get(None) == instruments.get("gong")   # GONG is the default
 True
 >>> instruments.names()
-('gong', 'hmi')
+('gong', 'hmi', 'mdi')
 
 New instruments are registered by module path (`register`), imported only
 when first asked for.
@@ -24,13 +24,16 @@ from gongsynth.instruments.base import FrameSchedule, Instrument, InstrumentPara
 from gongsynth.instruments.gong.parameters import GONGInstrument
 
 __all__ = ["get", "names", "register", "instrument_class", "from_dict", "DEFAULT", "Instrument",
-           "InstrumentParameters", "FrameSchedule", "Observables", "GONGInstrument", "HMIInstrument"]
+           "InstrumentParameters", "FrameSchedule", "Observables", "GONGInstrument", "HMIInstrument",
+           "MDIInstrument"]
 
 
 def __getattr__(name):
-    # HMI's parameters, imported when first asked for.
+    # HMI's and MDI's parameters, imported when first asked for.
     if name == "HMIInstrument":
         return instrument_class("hmi")
+    if name == "MDIInstrument":
+        return instrument_class("mdi")
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 #: The instrument of a run that names none.
@@ -38,7 +41,8 @@ DEFAULT = "gong"
 
 # Name -> "module:Class" (imported when first used).
 _REGISTRY = {"gong": "gongsynth.instruments.gong.parameters:GONGInstrument",
-             "hmi": "gongsynth.instruments.hmi.parameters:HMIInstrument"}
+             "hmi": "gongsynth.instruments.hmi.parameters:HMIInstrument",
+             "mdi": "gongsynth.instruments.mdi.parameters:MDIInstrument"}
 
 
 def register(name, target):
@@ -119,10 +123,10 @@ def get(instrument=None):
     --------
     >>> get("GONG").name
     'gong'
-    >>> get("spectroheliograph")
+    >>> get("spectro...")
     Traceback (most recent call last):
     ...
-    ValueError: instrument must be one of ('gong', 'hmi') or an instrument object, got 'spectroheliograph'
+    ValueError: instrument must be one of ('gong', 'hmi', 'mdi') or an instrument object, got 'spectro...'
     """
     if instrument is None:
         instrument = DEFAULT
