@@ -117,12 +117,17 @@ def test_a_uniform_line_of_sight_field_gives_a_magnetogram_of_its_sign(name, fie
     sun = Photosphere(abs(field) * u.G * one, (0 if field > 0 else 180) * u.deg * one, 0 * u.deg * one,
                       still, still, still, one, 1536 * u.km, periodic=True)
     cube = synthesize(sun, mu=1.0, instrument=inst)
-    # 45 s: one HMI LOS sequence, 2700 GONG frames.
-    result = gongsynth.simulate(cube, instrument=name, seed=2, duration=45 * u.s, detector_shape=16,
+    # 45 s: one HMI LOS sequence, 2700 GONG frames; MDI takes whole one-minute magnetograms.
+    duration = 1 * u.min if name == "mdi" else 45 * u.s
+    result = gongsynth.simulate(cube, instrument=name, seed=2, duration=duration, detector_shape=16,
                                 resolutions=(1,), progress=False)
     b = result.magnetogram.data
     assert b.shape == (16, 16) and result.raw.data.shape[0] == len(inst.analysers)
     assert np.all(np.sign(b) == np.sign(field))
     # The mean of 256 pixels is known to ~1 G (noise ≤ 10 G per pixel); the reductions'
     # own calibration (GONG's v0 slope, design §3.6; HMI's look-up tables) is good to a few %.
-    assert abs(np.mean(b) / field - 1) < 0.03
+    # MDI's level-1.8 archive multiplies its onboard magnetogram by its recalibration factor;
+    # its ratio algorithm depends on the line's width (-1.6 % per +10 % FWHM against its
+    # Gaussian table line): this Milne-Eddington line (Voigt, 9.1 pm) reads 3.1 % high.
+    expected = field * getattr(inst, "archive_factor", 1.0)
+    assert abs(np.mean(b) / expected - 1) < (0.05 if name == "mdi" else 0.03)

@@ -101,12 +101,12 @@ def lyot_narrowest_fsr(instrument=None):
     Returns
     -------
     `~astropy.units.Quantity`
-        In mÅ (1053 mÅ for 465 mÅ and 5 elements).
+        In mÅ (1049 mÅ for 465 mÅ and 5 elements: FWHM = 0.443 F_L).
 
     Examples
     --------
     >>> round(float(lyot_narrowest_fsr().value))
-    1053
+    1049
     """
     inst = resolve_mdi(instrument)
     return inst.lyot_fwhm.to(_mA) / _fwhm_per_fsr(inst.lyot_elements)
