@@ -124,7 +124,10 @@ def test_doppler_ratio_and_continuum_by_hand():
     blue = red[::-1]                           # S = -500, F4 - F2 = 600
     assert float(doppler_ratio(red)) == pytest.approx(500 / 600)
     assert float(doppler_ratio(blue)) == pytest.approx(-500 / 600)
-    assert np.isnan(doppler_ratio([2000.0, 2000.0, 2500.0, 2000.0]))     # no denominator
+    # Beyond F4 (F1 − F3 < 0 with a red numerator): +inf, held at the table's red end.
+    assert doppler_ratio([2000.0, 2600.0, 2500.0, 1900.0]) == np.inf
+    assert doppler_ratio([1900.0, 2500.0, 2600.0, 2000.0]) == -np.inf
+    assert np.isnan(doppler_ratio([2000.0, 2000.0, 2000.0, 2000.0]))     # no line at all
     with pytest.raises(ValueError, match="leading axis"):
         doppler_ratio(np.ones(3))
     assert float(onboard_continuum([3000.0, 3000.0, 2500.0, 2500.0, 3000.0])) == 3125.0

@@ -78,8 +78,9 @@ def doppler_ratio(filtergrams):
     -------
     alpha : `numpy.ndarray`
         (F1 + F2 − F3 − F4) / (F1 − F3) where the numerator is positive,
-        (F1 + F2 − F3 − F4) / (F4 − F2) elsewhere; NaN where that denominator
-        is not positive (no line to measure).
+        (F1 + F2 − F3 − F4) / (F4 − F2) elsewhere; ±inf (the numerator's sign:
+        the line has moved beyond F1 or F4) where that denominator is not
+        positive, NaN where the numerator is 0 too (no line to measure).
 
     Examples
     --------
@@ -97,7 +98,8 @@ def doppler_ratio(filtergrams):
     total = sa + sc
     denominator = np.where(total > 0, sa, -sc)
     with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(denominator > 0, total / denominator, np.nan)
+        beyond = np.where(total != 0, np.sign(total) * np.inf, np.nan)
+        return np.where(denominator > 0, total / denominator, beyond)
 
 
 def onboard_continuum(filtergrams):
@@ -178,12 +180,13 @@ class LookupTable:
         velocity : `numpy.ndarray`
             In m/s.
         outside : `numpy.ndarray` of bool
-            True where α lies outside the table (or is NaN): saturated.
+            True where α lies outside the table or is NaN (saturated, or no line).
         """
         alpha = np.asarray(alpha, dtype=float)
         outside = ~((alpha >= self.alpha[0]) & (alpha <= self.alpha[-1]))
-        # NaN (no line) reads as the far red end; it is flagged either way.
-        return np.interp(np.nan_to_num(alpha, nan=np.inf), self.alpha, self.velocity), outside
+        # ±inf is held at the table's blue or red end; NaN (no line at all) reads 0, flagged.
+        return np.interp(np.nan_to_num(alpha, nan=0.0, posinf=np.inf, neginf=-np.inf),
+                         self.alpha, self.velocity), outside
 
 
 @functools.lru_cache(maxsize=8)
@@ -212,7 +215,8 @@ def lookup_table(instrument=None):
     velocity = step * np.arange(-n, n + 1)
     shift = velocity / inst.velocity_per_wavelength.to_value(u.m / u.s / _mA)
     alpha = doppler_ratio(reference_filtergrams(shift, inst))
-    rising = np.isfinite(alpha[1:]) & np.isfinite(alpha[:-1]) & (np.diff(alpha) > 0)
+    with np.errstate(invalid="ignore"):   # ±inf beyond the branch: inf − inf
+        rising = np.isfinite(alpha[1:]) & np.isfinite(alpha[:-1]) & (np.diff(alpha) > 0)
     lo = hi = n
     while lo > 0 and rising[lo - 1]:
         lo -= 1
