@@ -110,7 +110,8 @@ def build_parser():
                      help="heliographic latitude(s) in degrees; several run a sweep "
                           "(e.g. --latitude 0 25 45 60 70 75)")
     sim.add_argument("--duration", type=_number(float, positive=True), metavar="MIN",
-                     help="observation length in minutes (a whole number of 1/60 s frames)")
+                     help="observation length in minutes, a whole number of the instrument's frames "
+                          "(default: its standard product, GONG 10, HMI 0.75)")
     sim.add_argument("--instrument", metavar="NAME",
                      help=f"the instrument: {', '.join(instruments.names())} (TOML: [instrument] name)")
     sim.add_argument("--engine", choices=ENGINES, help="camera engine")
@@ -186,6 +187,8 @@ def _simulation_config(args):
     changes = {}
     if args.instrument is not None and instruments.get(args.instrument).name != config.instrument.name:
         changes["instrument"] = instruments.get(args.instrument)  # its defaults; [instrument] was another's
+        if config.duration == config.instrument.default_duration:
+            changes["duration"] = None      # the new instrument's standard product, unless --duration says
     if args.duration is not None:
         changes["duration"] = args.duration * u.min
     for name in ("engine", "mode", "seed", "workers", "obstime", "sun", "site", "surface_field"):

@@ -262,7 +262,8 @@ class SimulationConfig:
     latitude : `~astropy.units.Quantity`
         Heliographic latitude of the field centre, in (-90°, 90°).
     duration : `~astropy.units.Quantity`
-        Observation length (time).
+        Observation length (time); default (None) the instrument's
+        ``default_duration`` (GONG: 10 min, HMI: 45 s).
     engine : str
         ``"blocks"`` or ``"frames"``.
     mode : str
@@ -338,7 +339,7 @@ class SimulationConfig:
     """
 
     latitude: u.Quantity = 0 * u.deg
-    duration: u.Quantity = 10 * u.min
+    duration: u.Quantity | None = None
     engine: str = "blocks"
     mode: str = "tiled"
     seed: int | None = None
@@ -375,6 +376,8 @@ class SimulationConfig:
             object.__setattr__(self, "photosphere_pixel_size", run_grid_default(self.sun, "pixel_size"))
         object.__setattr__(self, "pointing", _pointing(self.pointing, self.mode))
         object.__setattr__(self, "instrument", instruments.get(self.instrument))  # a name, or the object
+        if self.duration is None:   # the instrument's standard product (GONG: the paper's 10 min)
+            object.__setattr__(self, "duration", self.instrument.default_duration.to(u.min))
         for name, (unit, _) in _QUANTITIES.items():
             value = getattr(self, name)
             value = value if name != "pointing" else u.Quantity(value)

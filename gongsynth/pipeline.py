@@ -150,7 +150,7 @@ class Sweep(list):
         return sunpy.map.Map([getattr(result, product) for result in self], sequence=True)
 
 
-def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="blocks", seed=None,
+def simulate(stokes=None, *, latitude=0 * u.deg, duration=None, engine="blocks", seed=None,
              instrument=None, mode="tiled", detector_shape=None, resolutions=(1, 2, 4, 8),
              obstime=None, sun=None, photosphere_shape=None, photosphere_pixel_size=None,
              effects=None, photosphere=None, flat=None, dark=None, workers=None, progress=True,
@@ -167,8 +167,10 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=10 * u.min, engine="bl
         Default: the built-in Sun chosen by ``sun``, synthesised at that latitude.
     latitude : `~astropy.units.Quantity`
         Heliographic latitude of the field centre on the central meridian.
-    duration : `~astropy.units.Quantity`
+    duration : `~astropy.units.Quantity`, optional
         Observation length (10 min: the paper's; 1 min: a GONG magnetogram).
+        Default: the instrument's standard product (``default_duration``:
+        GONG 10 min, HMI 45 s).
     engine : {"blocks", "frames"}
         Camera engine (see `gongsynth.stages.camera.integrate`).
     seed : int, `numpy.random.SeedSequence`, `numpy.random.Generator` or None

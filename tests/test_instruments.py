@@ -105,6 +105,27 @@ def test_regular_schedule():
             whole_frames(bad, 3.75 * u.s)
 
 
+def test_a_regular_schedule_holds_whole_sequences_only():
+    """10 min of HMI is 13.33 sequences: planes 0-3 would get 14 frames, the others 13, and
+    the 7.7 % exposure difference between LCP and RCP read as a -136 G field everywhere."""
+    with pytest.raises(ValueError, match="whole number of sequences of 12 frames"):
+        FrameSchedule.regular(10 * u.min, 3.75 * u.s, 12)
+    with pytest.raises(ValueError, match="duration = 10.0 min"):
+        SimulationConfig(instrument="hmi", duration=10 * u.min)
+    assert FrameSchedule.regular(12 * u.min, 3.75 * u.s, 12).frames_per_plane.tolist() == [16] * 12
+
+
+def test_the_default_duration_is_the_instruments_standard_product():
+    from gongsynth.cli import _simulation_config, build_parser
+
+    assert SimulationConfig().duration == 10 * u.min
+    assert SimulationConfig(instrument="hmi").duration == 45 * u.s
+    args = build_parser().parse_args(["simulate", "--instrument", "hmi", "--out", "x"])
+    assert _simulation_config(args).duration == 45 * u.s
+    args = build_parser().parse_args(["simulate", "--instrument", "hmi", "--duration", "12", "--out", "x"])
+    assert _simulation_config(args).duration == 12 * u.min
+
+
 @pytest.mark.parametrize("name", instruments.names())
 @pytest.mark.parametrize("field", [300, -300])
 def test_a_uniform_line_of_sight_field_gives_a_magnetogram_of_its_sign(name, field):

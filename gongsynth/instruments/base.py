@@ -151,7 +151,10 @@ class Instrument(Protocol):
         ``schedule(duration)`` → `FrameSchedule`: the plane of every frame,
         the dither it carries (zero where there is none); it raises
         ValueError naming ``duration`` when the duration is not a whole
-        number of the instrument's frames.
+        number of the instrument's frames (or, for an instrument that
+        cycles through its planes, of its sequences).
+        ``default_duration`` (time): the length of a run that names none
+        (the instrument's standard product).
     Reduction
         ``algorithm``: ``"package.module:function"`` of
         ``function(planes, instrument, **options)`` → `Observables` from the
@@ -186,6 +189,7 @@ class Instrument(Protocol):
     plane_names: tuple
     algorithm: str
     gauss_per_velocity: u.Quantity
+    default_duration: u.Quantity
 
     def responses(self, wavelength):
         """(n_filtergrams, nλ) dimensionless transmissions at ``wavelength``."""
@@ -544,7 +548,11 @@ class FrameSchedule:
         Raises
         ------
         ValueError
-            Naming ``duration`` when it is not a positive whole number of frames.
+            Naming ``duration`` when it is not a positive whole number of
+            sequences (``n_planes`` frames): an incomplete sequence would give
+            some planes one frame more than the others, and the reduction,
+            which compares the planes' accumulated counts, would read that
+            exposure difference as a line shift.
 
         Examples
         --------
@@ -554,6 +562,10 @@ class FrameSchedule:
         (12, [1, 1, 1], 41.25)
         """
         n = whole_frames(duration, cadence)
+        if n % n_planes:
+            sequence = (n_planes * cadence).to(u.s)
+            raise ValueError(f"duration must be a whole number of sequences of {n_planes} frames "
+                             f"({sequence:g} each), got {duration} ({n / n_planes:.4g} sequences)")
         k = np.arange(n, dtype=np.int64)
         return cls(time=(k * cadence).to(u.s), plane=k % n_planes, dither=np.zeros(n, dtype=np.int64) * u.adu,
                    n_planes=int(n_planes), duration=(n * cadence).to(u.s))

@@ -245,6 +245,8 @@ class GONGInstrument(InstrumentParameters):
     line: ClassVar[str] = "Ni I 676.8"
     #: GONG's reduction algorithm (`gongsynth.instruments.gong.reduction.three_phase`).
     algorithm: ClassVar[str] = "gongsynth.instruments.gong.reduction:three_phase"
+    #: A run's length when none is given: the paper's 10-minute accumulation (paper, Sec. 3).
+    default_duration: ClassVar[u.Quantity] = 10 * u.min
 
     def __post_init__(self):
         super().__post_init__()

@@ -167,6 +167,9 @@ class HMIInstrument:
     #: imported by the reduction stage); the camera keeps every bit (no truncation, no dither).
     label = "HMI"
     algorithm = "gongsynth.instruments.hmi.observables:reduce_hmi"
+    #: A run's length when none is given: one LOS sequence, the hmi.M_45s magnetogram
+    #: (Schou et al. 2012, Sec. 4; the 720-s product is 16 sequences: 12 min).
+    default_duration = 45 * u.s
     truncate_bits = 0
 
     def __post_init__(self):

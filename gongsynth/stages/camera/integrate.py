@@ -262,7 +262,7 @@ def _switch(value, name):
     return bool(value)
 
 
-def integrate(expected, *, duration=10 * u.min, engine="blocks", seed=None, instrument=None,
+def integrate(expected, *, duration=None, engine="blocks", seed=None, instrument=None,
               flat=None, dark=None, photon_noise=True, read_noise=True, dither=True, truncation=True,
               chunk_rows=None, workers=None, progress=True):
     """
@@ -275,9 +275,9 @@ def integrate(expected, *, duration=10 * u.min, engine="blocks", seed=None, inst
         (K, ny, nx), or (n_snap, K, ny, nx) for an input that changes during
         the observation (snapshots spread evenly over ``duration``; see
         `snapshot_index`).  Finite and non-negative.
-    duration : `~astropy.units.Quantity`
+    duration : `~astropy.units.Quantity`, optional
         Observing time (whole number of frames): 1 min for GONG's product,
-        10 min (default) for the paper's.
+        10 min for the paper's.  Default: the instrument's ``default_duration``.
     engine : {"blocks", "frames"}
         ``"blocks"`` draws each plane's sum directly (fast, statistically
         equivalent); ``"frames"`` simulates every frame.  See `ENGINES`.
@@ -367,7 +367,7 @@ def integrate(expected, *, duration=10 * u.min, engine="blocks", seed=None, inst
     effects = {name: _switch(value, name) for name, value in (
         ("photon_noise", photon_noise), ("read_noise", read_noise), ("dither", dither),
         ("truncation", truncation))}
-    schedule = inst.schedule(duration)
+    schedule = inst.schedule(inst.default_duration if duration is None else duration)
     values = _check_expected(expected, schedule.n_planes)
     n_snap, _, ny, nx = values.shape
     snap = snapshot_index(schedule.n_frames, n_snap)
