@@ -111,7 +111,7 @@ def build_parser():
                           "(e.g. --latitude 0 25 45 60 70 75)")
     sim.add_argument("--duration", type=_number(float, positive=True), metavar="MIN",
                      help="observation length in minutes, a whole number of the instrument's frames "
-                          "(default: its standard product, GONG 10, HMI 0.75)")
+                          "(default: its standard product, GONG 10, HMI 0.75, MDI 1)")
     sim.add_argument("--instrument", metavar="NAME",
                      help=f"the instrument: {', '.join(instruments.names())} (TOML: [instrument] name)")
     sim.add_argument("--engine", choices=ENGINES, help="camera engine")

@@ -263,7 +263,7 @@ class SimulationConfig:
         Heliographic latitude of the field centre, in (-90°, 90°).
     duration : `~astropy.units.Quantity`
         Observation length (time); default (None) the instrument's
-        ``default_duration`` (GONG: 10 min, HMI: 45 s).
+        ``default_duration`` (GONG: 10 min, HMI: 45 s, MDI: 1 min).
     engine : str
         ``"blocks"`` or ``"frames"``.
     mode : str

@@ -92,7 +92,11 @@ def test_schedule_takes_only_whole_magnetograms():
             MDI.schedule(bad)
     with pytest.raises(ValueError, match="duration"):
         SimulationConfig(seed=1, instrument="mdi", duration=90 * u.s)
-    from gongsynth.cli import main
+    from gongsynth.cli import _simulation_config, build_parser, main
+    # A run that names no duration takes one magnetogram, in Python and on the command line.
+    assert SimulationConfig(seed=1, instrument="mdi").duration == 1 * u.min
+    assert _simulation_config(build_parser().parse_args(["simulate", "--instrument", "mdi", "--out", "x"])) \
+        .duration == 1 * u.min
     assert main(["simulate", "--instrument", "mdi", "--duration", "0.75", "--out", "unused"]) == 2
 
 

@@ -178,7 +178,7 @@ class MDIInstrument(InstrumentParameters):
 
     @property
     def default_duration(self):
-        """The observation a run takes by default: one magnetogram (1 min)."""
+        """A run's length when it names none: one magnetogram (1 min; the 96-minute product is 5)."""
         return self.magnetogram_cadence
 
     @property
@@ -270,8 +270,6 @@ class MDIInstrument(InstrumentParameters):
         >>> s.n_frames, s.frames_per_plane.tolist(), s.plane[:11].tolist()
         (20, [2, 2, 2, 2, 2, 2, 2, 2, 2, 2], [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 0])
         """
-        import numpy as np
-
         from gongsynth.instruments.base import FrameSchedule, whole_frames
         n = whole_frames(duration, self.frame_interval)
         per = self.frames_per_magnetogram
@@ -279,12 +277,9 @@ class MDIInstrument(InstrumentParameters):
             raise ValueError(f"duration must be a whole number of {self.magnetogram_cadence} MDI "
                              f"magnetograms ({per} filtergrams each), got {duration} ({n / per:g} "
                              f"magnetograms): an incomplete one would give some planes more frames")
-        k = np.arange(n, dtype=np.int64)
-        # Each 15-s pass takes F0..F4 in one polarisation; LCP and RCP passes alternate.
-        plane = (k // N_TUNINGS) % 2 * N_TUNINGS + k % N_TUNINGS
-        return FrameSchedule(time=(k * self.frame_interval).to(u.s), plane=plane,
-                             dither=np.zeros(n, dtype=np.int64) * u.adu, n_planes=N_MDI_PLANES,
-                             duration=(n * self.frame_interval).to(u.s))
+        # A 15-s pass takes F0..F4 in one polarisation, LCP and RCP passes alternate: frame k
+        # goes to plane k mod 10, the planes in turn.
+        return FrameSchedule.regular(duration, self.frame_interval, N_MDI_PLANES)
 
     @property
     def detector_maps(self):
