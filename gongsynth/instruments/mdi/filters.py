@@ -38,6 +38,7 @@ import math
 import astropy.units as u
 import numpy as np
 
+from gongsynth.instruments import quadrature
 from gongsynth.instruments.hmi.filters import bandpass_transmission, element_transmission
 from gongsynth.instruments.mdi.parameters import N_TUNINGS, resolve_mdi
 from gongsynth.validation import check_quantity
@@ -188,7 +189,7 @@ def _responses(offset_mA, inst):
 @functools.lru_cache(maxsize=16)
 def filter_quadrature(inst):
     """
-    The fine quadrature of the filter in mÅ about the line (cached per instrument).
+    The family's fine quadrature of the filter (`gongsynth.instruments.quadrature`) in mÅ about the line.
 
     Parameters
     ----------
@@ -203,10 +204,6 @@ def filter_quadrature(inst):
     responses : `numpy.ndarray`
         (5, n) filtergram responses on the grid.
     """
-    half = inst.integration_half_width.to_value(_mA)
-    step = inst.quadrature_step.to_value(_mA)
-    n = int(math.ceil(2 * half / step)) + 1
-    offset = np.linspace(-half, half, n)
-    weights = np.full(n, offset[1] - offset[0])
-    weights[[0, -1]] /= 2
-    return offset, weights, _responses(offset, inst)
+    grid, dlam, responses = quadrature.filter_quadrature(inst)
+    per_nm = (1 * u.nm).to_value(_mA)
+    return (grid - inst.line_wavelength.to_value(u.nm)) * per_nm, dlam * per_nm, responses

@@ -87,8 +87,8 @@ class MDIInstrument(InstrumentParameters):
     # ---- line and tuning
     line_wavelength: u.Quantity = _param(676.78, u.nm, "Ni I rest wavelength in air, 6767.8 A "
                                          "(Scherrer et al. 1995)")
-    lande_g: u.Quantity = _param(1.5, u.one, "Lande factor of the onboard K_m: the value used for Ni I "
-                                 "676.8 in the MDI and GONG reductions (Ulrich et al. 2009; GONG Eq. 9)")
+    lande_g: u.Quantity = _param(1.5, u.one, "Lande factor of the onboard K_m: GONG's Ni I 676.8 value "
+                                 "(GONG paper Eq. 9); MDI's constant not found, chosen the same")
     tuning_step: u.Quantity = _param(75.6, _mA, "spacing of F1-F4, FSR_narrow / 2.5: F1-F4 at -113.4, "
                                      "-37.8, +37.8, +113.4 mA (Scherrer et al. 1995; ipvcalc +-40, +-120)")
     nb_fsr: u.Quantity = _param(189.0, _mA, "narrow Michelson free spectral range (Scherrer et al. 1995)")
