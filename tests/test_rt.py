@@ -1,5 +1,4 @@
 """LTE Stokes synthesis of Ni I 676.78 nm (gongsynth.rt): analytic limits, the observed line, real MHD."""
-import warnings
 from pathlib import Path
 
 import astropy.units as u
@@ -10,7 +9,6 @@ from scipy.special import wofz
 import gongsynth
 from gongsynth.sun.photosphere._kernel import me_kernel, voigt_table
 from gongsynth.sun.rt import NiLineData, synthesize
-from gongsynth.sun.rt.atomic_data import LANDE_LS
 from gongsynth.sun.rt.kernels import ZEEMAN_CM_PER_G, faddeeva, solve_columns
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
@@ -222,25 +220,3 @@ def test_muram_snapshot_at_60_degrees(muram):
     assert cube.meta["reference_height_km"] == pytest.approx(1380, abs=100)   # mean tau_c = 1 height
     vmax = np.abs(cube.V.value).max(axis=2)
     assert np.corrcoef(vmax.ravel(), np.abs(cube.blos.value).ravel())[0, 1] > 0.5
-
-
-@needs_data
-def test_against_lightweaver(falc):
-    """Independent code (optional): Lightweaver's LTE FAL-C at mu = 1 with the same Ni I atom (its
-    partition functions from the atom's levels). Measured residuals are reported in the docs."""
-    pytest.importorskip("lightweaver")
-    from gongsynth.sun.photosphere.reference import falc_stokes
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        import lightweaver.rh_atoms as atoms
-        levels = tuple((lv.E, lv.g, lv.stage) for lv in atoms.NiI_atom().levels)
-    line = NiLineData(lande_g=LANDE_LS, partition_levels=levels)     # the atom's LS-coupling g
-    lam = np.linspace(676.73, 676.83, 51) * u.nm
-    ref = falc_stokes([0, 1000] * u.G, wavelength=lam)
-    for k, b in enumerate((0.0, 1000.0)):
-        ours = synthesize(uniform_field(falc, 0, 0, b), wavelength=lam, progress=False, line=line)
-        i, ri = ours.I.value[0, 0], ref.I.to_value(ours.I.unit)[0, k]
-        assert np.abs(i / i[0] - ri / ri[0]).max() < 0.01
-        if b:
-            v, rv = ours.V.value[0, 0] / i[0], ref.V.to_value(ours.I.unit)[0, k] / ri[0]
-            assert np.abs(v).max() == pytest.approx(np.abs(rv).max(), rel=0.05)
