@@ -256,7 +256,7 @@ class MDIInstrument(InstrumentParameters):
 
         Returns
         -------
-        `~gongsynth.instruments.base.FrameSchedule`
+        `~gongsynth.instruments.frames.FrameSchedule`
 
         Raises
         ------
@@ -270,7 +270,7 @@ class MDIInstrument(InstrumentParameters):
         >>> s.n_frames, s.frames_per_plane.tolist(), s.plane[:11].tolist()
         (20, [2, 2, 2, 2, 2, 2, 2, 2, 2, 2], [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 0])
         """
-        from gongsynth.instruments.base import FrameSchedule, whole_frames
+        from gongsynth.instruments.frames import FrameSchedule, whole_frames
         n = whole_frames(duration, self.frame_interval)
         per = self.frames_per_magnetogram
         if n % per:
