@@ -23,7 +23,12 @@ one comparison (``scale``):
 Nothing here is fitted to the real maps: they are the test of the prediction.
 The numbers are deterministic (about 30 s)::
 
-    python scripts/real_pairs_cross_calibration.py --out docs/guide/real_pairs_cross_calibration.ecsv
+    python scripts/real_pairs_cross_calibration.py --out docs/guide/real_pairs_cross_calibration.ecsv \
+        --summary docs/guide/real_pairs_summary.txt --factors docs/guide/cross_calibration_factors.txt
+
+``--summary`` and ``--factors`` write the reStructuredText tables the
+cross-calibration guide includes: the all-strength ratios per pair and
+scale, and the predicted factors of the conversion table.
 """
 import argparse
 import warnings
@@ -31,7 +36,7 @@ from pathlib import Path
 
 import astropy.units as u
 import numpy as np
-from astropy.table import vstack
+from astropy.table import QTable, vstack
 from sunpy.util.exceptions import SunpyMetadataWarning
 
 import gongsynth
@@ -90,18 +95,64 @@ def build_table(root=REAL, rotations=ROTATIONS, conversion=None):
     return out
 
 
+#: The |latitude| bands of the summary (deg), besides all latitudes.
+SUMMARY_BANDS = ((0, 25), (25, 45), (45, 60))
+
+
+def _pm(value, sigma):
+    return f"{value:.3f} ± {sigma:.3f}" if np.isfinite(sigma) else f"{value:.3f}"
+
+
+def summary(table):
+    """The all-strength rows as a small table of strings: flux ratio and slope, all latitudes and by band."""
+    every = (table["strength_min"] == 0 * u.G) & np.isinf(table["strength_max"])
+    rows = []
+    for rotation in sorted(set(table["rotation"])):
+        for scale in dict.fromkeys(table["scale"]):
+            pick = table[every & (table["rotation"] == rotation) & (table["scale"] == scale)]
+            bands = {(round(r["angle_min"].value), round(r["angle_max"].value)): r for r in pick}
+            # The predicted rows compare a map with itself times a smooth factor: no scatter to quote.
+            quote = (lambda r: f"{r['slope']:.3f}") if scale == "predicted" else (
+                lambda r: _pm(r["slope"], r["slope_uncertainty"]))
+            whole = bands[(0, 90)]
+            rows.append([f"CR {rotation}", scale, f"{whole['flux_ratio']:.3f}", quote(whole)]
+                        + [quote(bands[b]) for b in SUMMARY_BANDS])
+    names = ["pair", "scale", "flux ratio", "slope"] + [f"slope {lo}-{hi} deg" for lo, hi in SUMMARY_BANDS]
+    return QTable(rows=rows, names=names)
+
+
+def factors(conversion):
+    """The predicted factors over all field strengths, by latitude, as strings."""
+    from gongsynth.analysis.cross_calibration_table import conversion_factors
+
+    columns = {}
+    for source, target in (("gong", "hmi"), ("gong", "truth"), ("hmi", "truth")):
+        latitude, factor, sigma = conversion_factors(conversion, source, target)
+        columns["latitude (deg)"] = [f"{v:g}" for v in latitude.to_value(u.deg)]
+        columns[f"{source.upper()} -> {target if target == 'truth' else target.upper()}"] = [
+            _pm(f, s) for f, s in zip(factor, sigma)]
+    return QTable(columns)
+
+
 def main(argv=None):
     """Command line: build the table, print the all-strength rows and (with --out) write it."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[1])
     parser.add_argument("--real", type=Path, default=REAL, help="shared/data/real folder")
     parser.add_argument("--out", type=Path, help="write the table as ECSV")
+    parser.add_argument("--summary", type=Path, help="write the all-strength summary (reStructuredText)")
+    parser.add_argument("--factors", type=Path, help="write the predicted factors (reStructuredText)")
     args = parser.parse_args(argv)
-    table = build_table(args.real)
+    conversion = read_cross_calibration_table()
+    table = build_table(args.real, conversion=conversion)
     every = (table["strength_min"] == 0 * u.G) & np.isinf(table["strength_max"])
     for row in table[every]:
         print(f"CR {row['rotation']} {row['scale']:19s} |lat| {row['angle_min'].value:2.0f}-"
               f"{row['angle_max'].value:2.0f}  flux ratio {row['flux_ratio']:.3f}  slope {row['slope']:.3f} "
               f"+- {row['slope_uncertainty']:.3f}  r {row['correlation']:.3f}  ({row['n_pixels']} cells)")
+    for path, small in ((args.summary, summary(table)), (args.factors, factors(conversion))):
+        if path:
+            small.write(path, format="ascii.rst", overwrite=True)
+            print(f"wrote {path}")
     if args.out:
         table.write(args.out, format="ascii.ecsv", overwrite=True)
         print(f"wrote {args.out}")

@@ -66,24 +66,24 @@ def test_a_map_against_itself_times_1_3_gives_1_3():
 
 def test_two_resolutions_of_one_flux_preserving_map_give_1_for_the_signed_flux():
     # Disk: 0.5" pixels and their 5 x 5 means on 2.5" pixels sharing the reference point.
-    fine = _field((400, 400), seed=1, smooth=9) + 3.0  # a net flux, so that the signed ratio is defined
-    coarse = fine.reshape(80, 5, 80, 5).mean(axis=(1, 3))
+    fine = _field((200, 200), seed=1, smooth=9) + 3.0  # a net flux, so that the signed ratio is defined
+    coarse = fine.reshape(40, 5, 40, 5).mean(axis=(1, 3))
     table = cross_calibrate(_disk_map(fine, 0.5), _disk_map(coarse, 2.5), **ALL)
-    assert table["n_pixels"][0] == 80 * 80
+    assert table["n_pixels"][0] == 40 * 40
     assert table["signed_ratio"][0] == pytest.approx(1.0, abs=1e-12)
     assert table["slope"][0] == pytest.approx(1.0, abs=1e-10)
-    # Synoptic: an HMI-like 720 x 360 chart and its 2 x 2 means on GONG's 360 x 180 grid, in any order.
-    fine = _field((360, 720), seed=2) + 1.0
-    coarse = fine.reshape(180, 2, 360, 2).mean(axis=(1, 3))
+    # Synoptic: a chart and its 2 x 2 means (like HMI's 0.5° and GONG's 1° grids), in either order.
+    fine = _field((180, 360), seed=2) + 1.0
+    coarse = fine.reshape(90, 2, 180, 2).mean(axis=(1, 3))
     for a, b in ((_synoptic_map(coarse), _synoptic_map(fine)), (_synoptic_map(fine), _synoptic_map(coarse))):
         table = cross_calibrate(a, b, **ALL)
-        assert table["n_pixels"][0] == 180 * 360
-        assert table["signed_ratio"][0] == pytest.approx(1.0, abs=1e-12)
+        assert table["n_pixels"][0] == 90 * 180
+        assert table["signed_ratio"][0] == pytest.approx(1.0, abs=1e-9)  # round-off of sums that cancel
         assert table["slope"][0] == pytest.approx(1.0, abs=1e-10)
 
 
 def test_a_different_observer_is_reprojected_not_indexed():
-    field = _field((200, 200), seed=3, smooth=15)
+    field = _field((100, 100), seed=3, smooth=15)
     earth = _disk_map(field, 2.5)
     elsewhere = _disk_map(field, 2.5, observer=SkyCoord(0 * u.deg, 0 * u.deg, 0.99 * u.AU,
                                                         frame=frames.HeliographicStonyhurst,
@@ -156,11 +156,15 @@ def test_groups_and_masks_are_recorded():
     (lambda a, s: cross_calibrate(a, sunpy.map.Map(np.full((8, 8), np.nan), a.meta)), ValueError, "map_b"),
     (lambda a, s: bisector_slope([1, 2, 3], [3, 2, 1]), ValueError, "positively correlated"),
 ])
-def test_bad_inputs_name_the_argument(call, error, words):
-    a = _disk_map(_field((8, 8)), 2.5)
-    s = _synoptic_map(_field((90, 180)))
+def test_bad_inputs_name_the_argument(call, error, words, small_maps):
     with pytest.raises(error, match=words):
-        call(a, s)
+        call(*small_maps)
+
+
+@pytest.fixture(scope="module")
+def small_maps():
+    """A small disk image and a small synoptic map (built once: sunpy's headers take a while)."""
+    return _disk_map(_field((8, 8)), 2.5), _synoptic_map(_field((90, 180)))
 
 
 def test_exported_from_the_package():
@@ -181,9 +185,10 @@ def test_shipped_conversion_table_loads_with_units_and_provenance():
     assert table.meta["instruments"]["hmi"]["duration"] == "0.75 min"
     latitude, factor, uncertainty = conversion_factors(table, "gong", "hmi")
     assert latitude.size == 6 and np.all(np.isfinite(factor)) and np.all(uncertainty >= 0)
-    # Going there and back is (nearly) the identity: the two bisector slopes are reciprocal by construction.
+    # There and back is the identity: the bisector slopes of one seed are exactly reciprocal, their means
+    # over the seeds to the square of the seeds' relative scatter (~1e-4 here).
     _, back, _ = conversion_factors(table, "hmi", "gong")
-    assert np.allclose(factor * back, 1, rtol=1e-9)
+    assert np.allclose(factor * back, 1, rtol=1e-3)
 
 
 def test_calibrate_to_hmi_multiplies_by_the_factor_at_each_viewing_angle():
@@ -234,3 +239,37 @@ def test_map_instrument_reads_the_header():
     assert map_instrument(_disk_map(np.zeros((4, 4)), 2.5, telescope="NSO-GONG")) == "gong"
     with pytest.raises(ValueError, match="cannot tell"):
         map_instrument(named(telescop="SOLIS"))
+
+
+def test_the_table_builder_compares_every_pair_and_caches_the_runs(tmp_path, monkeypatch):
+    """The sweep's bookkeeping on stand-in runs: GONG sees the truth / 1.5, HMI / 1.2 (no simulation)."""
+    from types import SimpleNamespace
+
+    import gongsynth.cross_calibration_sweep as sweep
+
+    truth = _field((64, 64), seed=5, smooth=5)
+    seen = {"gong": 1.5, "hmi": 1.2}
+    calls = []
+
+    def fake_runs(configs, client=None, progress=True):
+        for index, config in enumerate(configs):
+            calls.append(config.instrument.name)
+            yield index, SimpleNamespace(magnetogram=_disk_map(truth / seen[config.instrument.name], 2.5),
+                                         truth=_disk_map(truth, 2.5))
+
+    monkeypatch.setattr(sweep, "simulate_each", fake_runs)
+    kwargs = dict(latitudes=[0] * u.deg, seeds=[1], resolution=10 * u.arcsec, strength_bins=[0, np.inf] * u.G,
+                  sun="milne-eddington", cache=tmp_path, progress=False)
+    table = sweep.cross_calibration_table(**kwargs)
+    assert calls == ["gong", "hmi"]
+    factor = {(r["instrument"], r["target"]): r["factor"] for r in table}
+    assert factor[("gong", "hmi")] == pytest.approx(1.5 / 1.2, rel=1e-9)
+    assert factor[("hmi", "gong")] == pytest.approx(1.2 / 1.5, rel=1e-9)
+    assert factor[("gong", "truth")] == pytest.approx(1.5, rel=1e-9)
+    assert factor[("hmi", "truth")] == pytest.approx(1.2, rel=1e-9)
+    assert table.meta["seeds"] == [1] and set(table.meta["instruments"]) == {"gong", "hmi"}
+    # A rerun reads the cached maps: nothing is simulated again, and the maps are the same bits.
+    configs = [sweep.instrument_config(name, 0 * u.deg, 1, sun="milne-eddington") for name in ("gong", "hmi")]
+    cached = sweep.simulate_instruments(configs, cache=tmp_path, progress=False)
+    assert calls == ["gong", "hmi"]
+    assert np.array_equal(cached[0][0].data, truth / 1.5) and np.array_equal(cached[1][1].data, truth)

@@ -52,6 +52,9 @@ def is_synoptic(smap):
     -------
     bool
     """
+    # The axis types first: cheaper than building the coordinate frame, which disk images never need here.
+    if tuple(str(axis)[:4] for axis in smap.coordinate_system) not in (("CRLN", "CRLT"), ("HGLN", "HGLT")):
+        return False
     frame = smap.coordinate_frame
     if not isinstance(frame, (frames.HeliographicCarrington, frames.HeliographicStonyhurst)):
         return False

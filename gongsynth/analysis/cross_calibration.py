@@ -151,7 +151,14 @@ def _on_grid_of(target, smap):
     """``smap``'s values at ``target``'s pixels: by index where the grids coincide, else reprojected."""
     ny, nx = target.data.shape
     y, x = np.mgrid[:ny, :nx]
-    px, py = smap.wcs.world_to_pixel(target.pixel_to_world(x * u.pix, y * u.pix))
+    wcs_a, wcs_b = target.wcs.wcs, smap.wcs.wcs
+    if (list(wcs_a.ctype) == list(wcs_b.ctype) and np.allclose(wcs_a.cdelt, wcs_b.cdelt)
+            and np.allclose(wcs_a.crval, wcs_b.crval) and np.allclose(wcs_a.get_pc(), wcs_b.get_pc())
+            and target.coordinate_frame.is_equivalent_frame(smap.coordinate_frame)):
+        # One frame and one tangent point: the grids differ by a shift of the reference pixel only.
+        px, py = x + (wcs_b.crpix[0] - wcs_a.crpix[0]), y + (wcs_b.crpix[1] - wcs_a.crpix[1])
+    else:
+        px, py = smap.wcs.world_to_pixel(target.pixel_to_world(x * u.pix, y * u.pix))
     finite = np.isfinite(px) & np.isfinite(py)
     if finite.any() and np.allclose(px[finite], np.round(px[finite]), atol=_ALIGNED) \
             and np.allclose(py[finite], np.round(py[finite]), atol=_ALIGNED):
