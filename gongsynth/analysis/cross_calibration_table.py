@@ -155,8 +155,8 @@ def conversion_factors(table, instrument, target):
     >>> latitude.unit, bool(np.all(factor > 0))
     (Unit("deg"), True)
     """
-    sources = sorted(set(np.asarray(table["instrument"])))
-    targets = sorted(set(np.asarray(table["target"])))
+    sources = sorted({str(name) for name in table["instrument"]})
+    targets = sorted({str(name) for name in table["target"]})
     if instrument not in sources:
         raise ValueError(f"the conversion table has no {instrument!r} rows; it converts from {sources}")
     if target not in targets:
