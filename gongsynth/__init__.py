@@ -34,6 +34,8 @@ _LAZY = {
     "SimulationResult": ("gongsynth.pipeline", "SimulationResult"),
     "StokesCube": ("gongsynth.sun.stokes", "StokesCube"),
     "calibrate": ("gongsynth.analysis.apply_calibration", "calibrate"),
+    "cross_calibrate": ("gongsynth.analysis.cross_calibration", "cross_calibrate"),
+    "cross_calibration_table": ("gongsynth.cross_calibration_sweep", "cross_calibration_table"),
     "load_observation": ("gongsynth.analysis.observations", "load_observation"),
     "model_atmosphere": ("gongsynth.sun.model_atmosphere", "model_atmosphere"),
     "open_flux": ("gongsynth.analysis.open_flux", "open_flux"),
@@ -106,7 +108,8 @@ def __dir__():
 
 
 __all__ = ["Atmosphere", "GONGInstrument", "GONGSynthMap", "SimulationResult", "StokesCube", "calibrate",
-           "calibration", "compare", "filters", "load_observation", "model_atmosphere",
+           "calibration", "cross_calibrate", "cross_calibration_table", "compare", "filters",
+           "load_observation", "model_atmosphere",
            "open_flux", "photosphere", "reduction", "rt", "simulate", "simulate_many",
            "surface_field_from_map", "synthetic_surface_field", "weak_flux_factor", "__citation__",
            "__version__"]

@@ -18,6 +18,13 @@ Rules (documented in the guide's calibration page):
   (the papers' quiet-Sun limit), the sunspot curve elsewhere (or the
   quiet-Sun curve if the table has no sunspot rows).  Off-disk and NaN
   pixels stay NaN.
+- **To another instrument's scale** (``to="hmi"``): the map's instrument is
+  read from its header (`map_instrument`); each pixel is multiplied by the
+  predicted conversion factor at its viewing angle, interpolated in θ like
+  the curves, from the conversion table
+  (`gongsynth.analysis.cross_calibration_table`; shipped:
+  ``gongsynth/data/cross_calibration_default.ecsv``).  The factor is one
+  number per angle over all field strengths.
 """
 import astropy.units as u
 import numpy as np
@@ -26,13 +33,28 @@ from sunpy.coordinates import frames, sun
 
 from gongsynth.analysis.calibration import gauss_values
 from gongsynth.analysis.calibration_table import read_calibration_table, table_curve
+from gongsynth.analysis.cross_calibration_table import conversion_factors, read_cross_calibration_table
 from gongsynth.analysis.disk import check_map, disk_coordinates
 from gongsynth.analysis.weak_flux import QUIET_LIMIT
 
-__all__ = ["viewing_angle", "calibrate", "weak_flux_factor_map"]
+__all__ = ["is_synoptic", "viewing_angle", "map_instrument", "calibrate", "weak_flux_factor_map"]
 
 
-def _is_synoptic(smap):
+def is_synoptic(smap):
+    """
+    Whether a map is a synoptic map: heliographic, spanning more than 180° of longitude.
+
+    Parameters
+    ----------
+    smap : `~sunpy.map.GenericMap`
+
+    Returns
+    -------
+    bool
+    """
+    # The axis types first: cheaper than building the coordinate frame, which disk images never need here.
+    if tuple(str(axis)[:4] for axis in smap.coordinate_system) not in (("CRLN", "CRLT"), ("HGLN", "HGLT")):
+        return False
     frame = smap.coordinate_frame
     if not isinstance(frame, (frames.HeliographicCarrington, frames.HeliographicStonyhurst)):
         return False
@@ -70,7 +92,7 @@ def viewing_angle(smap):
     (0.0, True)
     """
     check_map(smap)
-    if _is_synoptic(smap):
+    if is_synoptic(smap):
         ny, nx = smap.data.shape
         y, x = np.mgrid[:ny, :nx]
         latitude = smap.pixel_to_world(x * u.pix, y * u.pix).lat
@@ -78,6 +100,51 @@ def viewing_angle(smap):
         return np.abs(latitude - b0).to(u.deg)
     _, mu = disk_coordinates(smap)
     return np.rad2deg(np.arccos(mu)) * u.deg
+
+
+def map_instrument(smap):
+    """
+    The instrument of the family that made a map, from its header.
+
+    Simulated maps say it in their TELESCOP (``"gongsynth (simulated HMI)"``);
+    real ones: GONG (TELESCOP ending in "GONG", e.g. ``NSO-GONG``), HMI
+    (TELESCOP ``SDO/HMI`` or INSTRUME ``HMI...``), MDI (INSTRUME ``MDI``).
+
+    Parameters
+    ----------
+    smap : `~sunpy.map.GenericMap` or dict-like
+        The map, or its header.
+
+    Returns
+    -------
+    str
+        ``"gong"``, ``"hmi"`` or ``"mdi"``.
+
+    Raises
+    ------
+    ValueError
+        If the header names none of them.
+
+    Examples
+    --------
+    >>> map_instrument({"telescop": "NSO-GONG"}), map_instrument({"telescop": "SOHO", "instrume": "MDI"})
+    ('gong', 'mdi')
+    """
+    meta = smap.meta if hasattr(smap, "meta") else smap
+    if not hasattr(meta, "get"):
+        raise TypeError(f"smap must be a sunpy Map or a header, got {type(smap).__name__}")
+    telescope = str(meta.get("telescop", "")).strip().upper()
+    instrument = str(meta.get("instrume", "")).strip().upper()
+    if telescope.startswith("GONGSYNTH (SIMULATED ") and telescope.endswith(")"):
+        return telescope[len("GONGSYNTH (SIMULATED "):-1].lower()
+    if telescope.endswith("GONG"):
+        return "gong"
+    if "HMI" in telescope or instrument.startswith("HMI"):
+        return "hmi"
+    if "MDI" in instrument or "MDI" in telescope:
+        return "mdi"
+    raise ValueError(f"cannot tell which instrument made smap (TELESCOP = {telescope!r}, INSTRUME = "
+                     f"{instrument!r}): pass instrument= to calibrate")
 
 
 def _interpolation(theta, angles):
@@ -88,6 +155,16 @@ def _interpolation(theta, angles):
         return lower, np.zeros_like(clamped)
     weight = (clamped - angles[lower]) / (angles[lower + 1] - angles[lower])
     return lower, weight
+
+
+def _factor_at(theta, angles, factors):
+    """Factors tabulated at increasing ``angles`` (deg), interpolated linearly in θ (clamped); NaN θ: NaN."""
+    valid = np.isfinite(theta)
+    out = np.full(theta.shape, np.nan)
+    lower, weight = _interpolation(theta[valid], angles)
+    upper = np.minimum(lower + 1, factors.size - 1)
+    out[valid] = (1 - weight) * factors[lower] + weight * factors[upper]
+    return out
 
 
 def _apply(values, theta, table, region):
@@ -105,9 +182,9 @@ def _apply(values, theta, table, region):
     return out
 
 
-def calibrate(smap, *, table=None, force=False):
+def calibrate(smap, *, table=None, force=False, to="truth", instrument=None):
     """
-    Calibrate a magnetogram: replace each measured value by the true B_LOS it implies.
+    Calibrate a magnetogram: each value replaced by the true B_LOS it implies, or put on another scale.
 
     Parameters
     ----------
@@ -115,19 +192,44 @@ def calibrate(smap, *, table=None, force=False):
         Line-of-sight magnetogram in G (or unitless values taken as G): a
         simulated or real GONG (or other) disk image, or a synoptic map.
     table : `~astropy.table.QTable` or path-like, optional
-        Calibration table (`gongsynth.analysis.calibration_table`); default
-        the table shipped with gongsynth.
+        ``to="truth"``: the calibration table
+        (`gongsynth.analysis.calibration_table`); otherwise the conversion
+        table (`gongsynth.analysis.cross_calibration_table`).  Default the
+        table shipped with gongsynth.
     force : bool, optional
         Calibrate even a map that is not a measurement: one calibrated
         already (its ``CALTABLE``: a second calibration multiplies the
         correction again) or a gongsynth ground-truth map.  Refused (ValueError)
         unless true.
+    to : str
+        ``"truth"`` (default): the papers' curves, truth = g(measured, θ)
+        (with a conversion table as ``table``: the map's instrument's
+        predicted factor to the truth instead, for any instrument).
+        An instrument's name (``"hmi"``; ``"mdi"`` once tabulated): the map
+        on that instrument's scale, measured × the predicted factor at each
+        pixel's θ.
+    instrument : str, optional
+        The map's instrument for ``to`` other than ``"truth"``; default read
+        from its header (`map_instrument`).
 
     Returns
     -------
     `~sunpy.map.GenericMap`
         Same WCS and metadata, calibrated data in G, with ``CALTABLE`` naming
-        the table and a HISTORY line.
+        the table (and ``CALTO`` the target scale) and a HISTORY line.
+
+    Examples
+    --------
+    >>> import numpy as np, astropy.units as u, sunpy.map
+    >>> from astropy.coordinates import SkyCoord
+    >>> from sunpy.coordinates import frames
+    >>> ref = SkyCoord(0 * u.arcsec, 0 * u.arcsec, frame=frames.Helioprojective,
+    ...                observer="earth", obstime="2020-01-01")
+    >>> header = sunpy.map.make_fitswcs_header((3, 3), ref, scale=[2.5, 2.5] * u.arcsec / u.pix,
+    ...                                        unit=u.G, telescope="NSO-GONG")
+    >>> on_hmi = calibrate(sunpy.map.Map(np.full((3, 3), 10.0), header), to="hmi")
+    >>> on_hmi.meta["calto"], bool(on_hmi.data[1, 1] > 10)
+    ('hmi', True)
     """
     check_map(smap)
     content = str(smap.meta.get("content", ""))
@@ -138,6 +240,13 @@ def calibrate(smap, *, table=None, force=False):
     if not force and content.upper().startswith("TRUE B_LOS"):
         raise ValueError(f"the map is a ground-truth map (CONTENT = {content!r}), not a measurement: "
                          f"calibrate the magnetogram, or force it (calibrate --force)")
+    if not isinstance(to, str) or not to:
+        raise ValueError(f"to must be 'truth' or an instrument's name, got {to!r}")
+    to = to.lower()
+    if to != "truth" or (hasattr(table, "colnames") and "target" in table.colnames):
+        return _convert(smap, to, table, instrument)
+    if instrument is not None:
+        raise ValueError("instrument is used only with to= another instrument (the truth table is GONG's)")
     if table is None or not hasattr(table, "colnames"):
         table = read_calibration_table(table)
     measured = gauss_values(smap, "smap")
@@ -158,6 +267,25 @@ def calibrate(smap, *, table=None, force=False):
     meta["caltable"] = str(table.meta.get("source", "in-memory table"))[:68]
     meta["history"] = (str(meta.get("history", "")) + "\ngongsynth.calibrate: truth = g(measured, theta) "
                        "from the papers' flux-conserving curves").strip()
+    return sunpy.map.Map(out, meta)
+
+
+def _convert(smap, to, table, instrument):
+    """The map on instrument ``to``'s scale: measured × the predicted factor at each pixel's θ."""
+    source = map_instrument(smap) if instrument is None else str(instrument).lower()
+    if source == to:
+        raise ValueError(f"smap is a {source.upper()} map already: to={to!r} would change nothing")
+    if table is None or not hasattr(table, "colnames"):
+        table = read_cross_calibration_table(table)
+    latitude, factors, _ = conversion_factors(table, source, to)
+    measured = gauss_values(smap, "smap")
+    out = measured * _factor_at(viewing_angle(smap).to_value(u.deg), latitude.to_value(u.deg), factors)
+    meta = smap.meta.copy()
+    meta["bunit"] = "G"
+    meta["caltable"] = str(table.meta.get("source", "in-memory table"))[:68]
+    meta["calto"] = to
+    meta["history"] = (str(meta.get("history", "")) + f"\ngongsynth.calibrate: {source.upper()} put on "
+                       f"{to.upper()}'s scale, measured x predicted factor(theta)").strip()
     return sunpy.map.Map(out, meta)
 
 
@@ -183,12 +311,7 @@ def weak_flux_factor_map(smap, *, table=None):
     quiet = np.asarray(table["region"]) == "quiet"
     angles = table["latitude"][quiet].to_value(u.deg)
     order = np.argsort(angles)
-    factors = np.asarray(table["factor"][quiet])[order]
-    valid = np.isfinite(theta)
-    out = np.full(theta.shape, np.nan)
-    lower, weight = _interpolation(theta[valid], angles[order])
-    upper = np.minimum(lower + 1, factors.size - 1)
-    out[valid] = (1 - weight) * factors[lower] + weight * factors[upper]
+    out = _factor_at(theta, angles[order], np.asarray(table["factor"][quiet])[order])
     meta = smap.meta.copy()
     meta["bunit"] = ""
     return sunpy.map.Map(out, meta)

@@ -75,7 +75,7 @@ from gongsynth.analysis.calibration import gauss_values
 from gongsynth.analysis.disk import check_map
 from gongsynth.optional import import_optional
 
-__all__ = ["POLAR_FILLS", "ZERO_POINTS", "prepare_synoptic_map", "pfss_extrapolation",
+__all__ = ["POLAR_FILLS", "ZERO_POINTS", "synoptic_pixel_edges", "prepare_synoptic_map", "pfss_extrapolation",
            "source_surface_flux", "open_flux", "in_situ_open_flux"]
 
 #: Accepted values of ``polar_fill``.
@@ -87,8 +87,27 @@ _DEFAULT_SHAPE = (90, 180)
 _ANGLE_TOLERANCE = 0.1  # deg: the tolerance of sunkit-magex's own full-Sun check
 
 
-def _pixel_edges(smap):
-    """Sine latitude and longitude (deg) of the pixel edges from the WCS; ValueError if not full-Sun."""
+def synoptic_pixel_edges(smap):
+    """
+    Sine latitude and longitude (deg) of a full-Sun synoptic map's pixel edges, from its WCS.
+
+    Parameters
+    ----------
+    smap : `~sunpy.map.GenericMap`
+        A CEA or CAR Carrington map spanning 360° × 180°.
+
+    Returns
+    -------
+    sin_lat : `numpy.ndarray`
+        ``ny + 1`` edges in sine latitude.
+    lon : `numpy.ndarray`
+        ``nx + 1`` edges in longitude (deg).
+
+    Raises
+    ------
+    ValueError
+        If the map is not a full-Sun CEA or CAR map with unrotated axes.
+    """
     with warnings.catch_warnings():  # the pixel grid needs no observer (HMI's charts have none)
         warnings.simplefilter("ignore", SunpyMetadataWarning)
         wcs = smap.wcs.wcs
@@ -133,7 +152,7 @@ def _check_synoptic(smap):
     if axes not in (("CRLN", "CRLT"), ("HGLN", "HGLT")):
         raise ValueError(f"synoptic_map must be a heliographic (Carrington) synoptic map, got axes "
                          f"{tuple(smap.coordinate_system)}; disk images have no far side")
-    return _pixel_edges(smap)
+    return synoptic_pixel_edges(smap)
 
 
 def _fill_poles(data, sin_lat_edges, polar_fill, polar_cap):
