@@ -53,10 +53,10 @@ import functools
 import astropy.units as u
 import numpy as np
 
+from gongsynth.instruments.base import Observables
 from gongsynth.instruments.hmi.profiles import gaussian_line
 from gongsynth.instruments.mdi.filters import filter_quadrature
 from gongsynth.instruments.mdi.parameters import N_MDI_PLANES, N_TUNINGS, resolve_mdi
-from gongsynth.stages.reduction import Observables
 from gongsynth.validation import check_finite
 
 __all__ = ["LookupTable", "doppler_ratio", "lookup_table", "reference_filtergrams", "onboard_continuum",
