@@ -287,7 +287,7 @@ def test_compare_two_noise_maps_numbers():
     rng = np.random.default_rng(3)
     a = np.where(rho < 1, rng.normal(0, 3.0, rho.shape), np.nan)
     b = np.where(rho < 1, rng.normal(0, 6.0, rho.shape), np.nan)
-    report = compare(hpc_map(a, 2.5), hpc_map(b, 2.5), plot=False)
+    report = compare(hpc_map(a, 2.5), hpc_map(b, 2.5), plot=False, statistics=False)
     assert isinstance(report, ComparisonReport)
     assert not report.sim.degraded and not report.obs.degraded
     assert report.ratios["noise_median_std"] == pytest.approx(0.5, rel=0.03)
@@ -308,7 +308,7 @@ def test_compare_simulated_gong_format_with_real_mdi(tmp_path, mdi):
     rng = np.random.default_rng(8)
     sim_path = write_gong_fits(tmp_path / "sim.fits", rng.normal(0, 3.0, (860, 860)))
     sim = load_observation(sim_path)
-    report = compare(sim, mdi, labels=("GONG-format", "MDI"))
+    report = compare(sim, mdi, labels=("GONG-format", "MDI"), statistics=False)
     assert report.obs.degraded and not report.sim.degraded
     assert report.obs.pixel_scale.to_value(u.arcsec) == pytest.approx(2.5)
     assert report.sim.noise.sigma.to_value(u.G) == pytest.approx(3.0, rel=0.10)
@@ -407,7 +407,7 @@ def test_gongsynth_product_file_compared_off_disk_centre(tmp_path):
     assert type(loaded).__name__ == "GONGSynthMap" and loaded.unit == u.G
     with pytest.raises(ValueError, match="no 24x24-pixel box"):
         noise_estimate(loaded)
-    report = compare(loaded, loaded, plot=False)
+    report = compare(loaded, loaded, plot=False, statistics=False)
     assert report.sim.noise.layout == "tiles"
     assert report.sim.noise.median_std.to_value(u.G) == pytest.approx(3.0, rel=0.05)
     cont = maps.make_product_map(np.ones((40, 40)) * u.adu, centre=centre, scale=2.5 * u.arcsec,

@@ -63,12 +63,13 @@ def test_matching_the_noise_equalises_pixel_difference_noise_and_ks():
     a, b = _map(rng.normal(0, 2, (400, 400))), _map(rng.normal(0, 5, (400, 400)))
     a2, b2, added = match_noise(a, b, seed=1)
     assert added[1] == 0 and b2 is b
-    assert pixel_difference_sigma(a2.data) == pytest.approx(pixel_difference_sigma(b.data), rel=0.03)
+    # Matched on the quietest boxes, each known to ~1.2 % (noise_estimate): 5 % is three sigma of both.
+    assert pixel_difference_sigma(a2.data) == pytest.approx(pixel_difference_sigma(b.data), rel=0.05)
     stats = compare_statistics(a, b)
     t = stats.table
     assert list(t["map"]) == ["sim", "obs", "sim, noise matched", "obs, noise matched"]
     assert t["ks"][0] > 0.2 and t["ks"][2] < 0.02     # different laws, then the same (n ~ 1e5: KS ~ 0.005)
-    assert t["mean_abs"][2].to_value(u.G) == pytest.approx(5 * np.sqrt(2 / np.pi), rel=0.03)
+    assert t["mean_abs"][2].to_value(u.G) == pytest.approx(5 * np.sqrt(2 / np.pi), rel=0.05)
     low, high = stats.spectrum_ratio_range(matched=True)
     assert 0.7 < low <= high < 1.4
     report = compare(a, b, plot=True)

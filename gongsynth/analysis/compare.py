@@ -522,7 +522,8 @@ def compare(sim_map, obs_map, *, instrument=None, degrade="auto", labels=("simul
     return report
 
 
-def compare_files(sim_path, obs_path, *, out=None, overwrite=False, instrument=None, degrade="auto"):
+def compare_files(sim_path, obs_path, *, out=None, overwrite=False, instrument=None, degrade="auto",
+                  statistics=True):
     """
     Compare a simulated and an observed magnetogram FITS file (``gongsynth compare``).
 
@@ -538,6 +539,8 @@ def compare_files(sim_path, obs_path, *, out=None, overwrite=False, instrument=N
         Replace an existing ``out``.
     instrument : `~gongsynth.GONGInstrument`, optional
     degrade : {"auto", True, False}
+        See `compare`.
+    statistics : bool
         See `compare`.
 
     Returns
@@ -581,7 +584,7 @@ def compare_files(sim_path, obs_path, *, out=None, overwrite=False, instrument=N
     obs = load_observation(obs_path, kind="magnetogram")
     labels = (f"simulated ({Path(sim_path).name})", f"observed ({Path(obs_path).name})")
     report = compare(sim, obs, instrument=instrument, degrade=degrade, labels=labels,
-                     plot=out is not None)
+                     plot=out is not None, statistics=statistics)
     if out is not None:
         with atomic_path(out, overwrite=overwrite) as tmp:
             report.figure.savefig(tmp, dpi=110, format=image_format)

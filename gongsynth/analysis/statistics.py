@@ -40,6 +40,7 @@ __all__ = [
     "tail_percentiles",
     "RING_EDGES",
     "ring_means",
+    "rings_of_values",
 ]
 
 #: Ratio of the standard deviation to the median absolute deviation of a
@@ -415,8 +416,28 @@ def ring_means(smap, edges=RING_EDGES):
     if e.ndim != 1 or e.size < 2 or np.any(np.diff(e) <= 0) or e[0] < 0:
         raise ValueError(f"edges must be >= 2 increasing radii >= 0 (solar radii), got {edges!r}")
     unit = smap.unit if smap.unit is not None else u.one
-    data = map_values(smap)
-    rho, _ = disk_coordinates(smap)
+    return rings_of_values(map_values(smap), disk_coordinates(smap)[0], e, unit)
+
+
+def rings_of_values(data, rho, edges, unit):
+    """
+    `ring_means` of an image whose distances from disk centre are known (what it does after finding them).
+
+    Parameters
+    ----------
+    data, rho : `numpy.ndarray`
+        (ny, nx) values and distances from disk centre (solar radii; NaN where undefined).
+    edges : `numpy.ndarray`
+        Increasing ring edges, solar radii.
+    unit : `~astropy.units.Unit`
+        Unit of ``data``.
+
+    Returns
+    -------
+    `~astropy.table.QTable`
+        As for `ring_means`.
+    """
+    e = np.asarray(edges, dtype=float)
     with np.errstate(invalid="ignore"):
         good = np.isfinite(data) & np.isfinite(rho)
     ring = np.digitize(rho[good], e) - 1
