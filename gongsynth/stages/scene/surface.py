@@ -181,15 +181,16 @@ def large_scale_grid(obstime=None, surface_field=None, *, step=0.25 * u.deg, sit
         except (ValueError, TypeError):
             field = sample_surface_field(surface_field, glon * u.deg, glat * u.deg, time).to_value(u.G)
         field = np.where(np.isfinite(field), field, 0.0)
-    if network is not None:
-        field = network.on_grid(lon, lat, field)
     # μ of each grid point seen from the Earth at its distance (the blueshift's argument; 0 beyond the limb).
     b0 = sun.B0(time).to_value(u.rad)
     distance = (get_earth(time).radius / radius).to_value(u.one)
     rlat, rlon = np.radians(glat), np.radians(glon)
     point = np.stack([np.cos(rlat) * np.cos(rlon), np.cos(rlat) * np.sin(rlon), np.sin(rlat)])
     sight = np.array([distance * np.cos(b0), 0.0, distance * np.sin(b0)])[:, None, None] - point
-    mu = np.clip((point * sight).sum(axis=0) / np.sqrt((sight ** 2).sum(axis=0)), 0.0, 1.0)
+    facing = (point * sight).sum(axis=0) / np.sqrt((sight ** 2).sum(axis=0))
+    mu = np.clip(facing, 0.0, 1.0)
+    if network is not None:   # on the visible side and a degree beyond: the scene samples nothing else
+        field = network.on_grid(lon, lat, field, where=facing > -0.02)
     velocity = disk_velocity(glon * u.deg, glat * u.deg, mu, time, site=site, rotation=rotation,
                              observer=observer, blueshift=blueshift).to_value(u.m / u.s)
     meta = {"obstime": time.isot, "step_deg": dstep, "surface_field": None if surface_field is None

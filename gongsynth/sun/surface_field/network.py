@@ -121,7 +121,7 @@ class SupergranularNetwork:
         if not 0 <= float(self.coherence) <= 1:
             raise ValueError(f"coherence must be in [0, 1], got {self.coherence!r}")
 
-    def on_grid(self, longitude, latitude, large_scale):
+    def on_grid(self, longitude, latitude, large_scale, where=None):
         """
         The radial flux density of the large-scale field with its quiet part carried by the network.
 
@@ -131,6 +131,11 @@ class SupergranularNetwork:
             1-D, uniform grid axes in deg (Stonyhurst; longitude may span 360° with both ends).
         large_scale : `numpy.ndarray`
             (nlat, nlon) radial flux density of the large-scale field, G.
+        where : `numpy.ndarray`, optional
+            (nlat, nlon) bool: the grid points to lay the network on (e.g. the
+            visible hemisphere: half the work); the others keep the large-scale
+            field.  The budget is the region's area times ``flux_density``.
+            Default: everywhere.
 
         Returns
         -------
@@ -156,40 +161,44 @@ class SupergranularNetwork:
         cell_sign = np.where(rng.uniform(size=n_cells) < 0.5, -1.0, 1.0)
         # Distance of every grid point to the nearest cell wall (chords: the cells are small).
         glat, glon = np.meshgrid(lat, lon, indexing="ij")
+        inside = np.ones(field.shape, dtype=bool) if where is None else np.asarray(where, dtype=bool)
+        if inside.shape != field.shape:
+            raise ValueError(f"where must have shape {field.shape}, got {inside.shape}")
+        glat, glon = glat[inside], glon[inside]
         points = np.stack([np.cos(glat) * np.cos(glon), np.cos(glat) * np.sin(glon), np.sin(glat)], axis=-1)
-        d, idx = cKDTree(centres).query(points.reshape(-1, 3), k=2)
+        d, idx = cKDTree(centres).query(points, k=2)
         sep = np.linalg.norm(centres[idx[:, 1]] - centres[idx[:, 0]], axis=1)
         wall = r_km * (d[:, 1] ** 2 - d[:, 0] ** 2) / (2 * sep)
         # Grid-cell areas (cm²): equal-angle cells shrink as cos(latitude).
         step_lon = abs(lon[1] - lon[0]) if lon.size > 1 else 2 * math.pi
         step_lat = abs(lat[1] - lat[0]) if lat.size > 1 else math.pi
-        area = (r_km * 1e5) ** 2 * step_lon * step_lat * np.maximum(np.cos(glat), 1e-9).ravel()
+        area = (r_km * 1e5) ** 2 * step_lon * step_lat * np.maximum(np.cos(glat), 1e-9)
         # Avoid laying flux twice on a longitude that the grid holds at both ends (-180 and 180).
         unique = np.ones(lon.size, dtype=bool)
         if lon.size > 1 and math.isclose(lon[-1] - lon[0], 2 * math.pi, rel_tol=1e-9):
             unique[-1] = False
         weight = np.exp(-0.5 * (wall / self.lane_width.to_value(u.km)) ** 2) * area
-        weight *= np.broadcast_to(unique, glat.shape).ravel()
+        weight *= np.broadcast_to(unique, field.shape)[inside]
         # The concentrations' fluxes (Parnell et al. 2009) for the whole Sun's budget.
         b_net = self.flux_density.to_value(u.G)
         lo, hi = self.flux_range.to_value(u.Mx)
         a = 1.0 - float(self.flux_index)
         rng = stage_generator(root, "network", _FLUXES)
         mean_flux = (a / (a + 1)) * (hi ** (a + 1) - lo ** (a + 1)) / (hi ** a - lo ** a)
-        total = b_net * 4 * math.pi * (r_km * 1e5) ** 2
+        total = b_net * np.sum(area * np.broadcast_to(unique, field.shape)[inside])
         q = rng.uniform(size=int(round(total / mean_flux)))
         fluxes = (lo ** a + q * (hi ** a - lo ** a)) ** (1.0 / a)
         where = stage_generator(root, "network", _PLACES).choice(weight.size, size=fluxes.size,
                                                                  p=weight / weight.sum())
         # Polarities: the large-scale imbalance, then the cells' own signs in what it leaves free.
-        f = np.clip(field.ravel()[where] / b_net, -1.0, 1.0)
+        f = np.clip(field[inside][where] / b_net, -1.0, 1.0)
         lean = float(self.coherence) * 0.5 * (cell_sign[idx[where, 0]] + cell_sign[idx[where, 1]])
         p_positive = 0.5 * (1.0 + f + (1.0 - np.abs(f)) * lean)
         signs = np.where(stage_generator(root, "network", _SIGNS).uniform(size=fluxes.size) < p_positive,
                          1.0, -1.0)
-        network = np.bincount(where, weights=signs * fluxes / area[where], minlength=weight.size)
-        network = network.reshape(field.shape)
+        network = np.zeros(field.shape)
+        network[inside] = np.bincount(where, weights=signs * fluxes / area[where], minlength=weight.size)
         if not unique[-1]:
             network[:, -1] = network[:, 0]
-        carried = np.clip(field, -b_net, b_net)
+        carried = np.where(inside, np.clip(field, -b_net, b_net), 0.0)
         return field - carried + network
