@@ -344,11 +344,12 @@ def test_compare_files_writes_figure_and_refuses_overwrite(tmp_path):
     assert out.stat().st_size > 10_000
     assert report.ratios["noise_median_std"] == pytest.approx(0.6, rel=0.05)
     assert "sim.fits" in report.sim.label and "obs.fits" in report.obs.label
+    assert report.statistics is not None                  # the table, and the spectra in the figure
     with pytest.raises(FileExistsError, match="overwrite"):
         compare_files(sim, obs, out=out)
-    compare_files(sim, obs, out=out, overwrite=True)
+    compare_files(sim, obs, out=out, overwrite=True, statistics=False)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["compare.png", "obs.fits", "sim.fits"]
-    assert compare_files(sim, obs).figure is None
+    assert compare_files(sim, obs, statistics=False).figure is None
     with pytest.raises(FileNotFoundError, match="folder"):
         compare_files(sim, obs, out=tmp_path / "missing" / "c.png")
 
