@@ -42,9 +42,13 @@ The ingredients and the numbers behind them (set once, not fitted to any map):
   (chosen, from the look of quiet-Sun magnetograms, e.g. Schrijver & Zwaan
   2000, *Solar and Stellar Magnetic Activity*, ch. 4; not fitted).
 
-Not modelled here: ephemeral regions (bipoles inside the cells; their flux
-is in the library's quiet patches), the cells' evolution and flows (a
-snapshot), and the internetwork (in the library's patches: Lites et al. 2008,
+- **Ephemeral regions**: bipoles emerging inside the cells, 1.5 G of
+  unsigned flux on the Sun at any time, fluxes exponentially distributed
+  about 1.1e19 Mx per polarity, footpoints 7 Mm apart (Hagenaar 2001, ApJ
+  555, 448; see `EPHEMERAL_FLUX_DENSITY`).
+
+Not modelled here: the cells' evolution and flows (a snapshot), and the
+internetwork (in the library's patches: Lites et al. 2008,
 Orozco Suárez & Bellot Rubio 2012, see `gongsynth.sun.photosphere.model`).
 """
 import math
@@ -58,14 +62,24 @@ from sunpy.sun.constants import radius as solar_radius
 from gongsynth.seeding import as_seed_sequence, stage_generator
 from gongsynth.validation import check_quantity
 
-__all__ = ["SupergranularNetwork", "NETWORK_FLUX_DENSITY", "SUPERGRANULE_SIZE"]
+__all__ = ["SupergranularNetwork", "NETWORK_FLUX_DENSITY", "SUPERGRANULE_SIZE", "EPHEMERAL_FLUX",
+           "EPHEMERAL_FLUX_DENSITY", "EPHEMERAL_SEPARATION"]
 
 #: Mean unsigned network flux density over the quiet Sun (see the module docstring).
 NETWORK_FLUX_DENSITY = 5 * u.G
 #: Mean spacing of supergranule centres (Rieutord & Rincon 2010).
 SUPERGRANULE_SIZE = 30 * u.Mm
 
-_CENTRES, _FLUXES, _PLACES, _SIGNS = range(4)
+_CENTRES, _FLUXES, _PLACES, _SIGNS, _EPHEMERAL = range(5)
+
+#: Ephemeral regions: mean flux of one polarity (Mx) and unsigned flux density present on the Sun (G).
+#: Hagenaar 2001 (ApJ 555, 448, MDI full disk): mean ER flux 1.1e19 Mx, lifetime ~4.4 h and an
+#: emergence rate of ~5e23 Mx per day over the Sun; rate × lifetime ≈ 9e22 Mx present, 1.5 G over
+#: its 6.1e22 cm² (values as recalled, not checked against the paper this session).
+EPHEMERAL_FLUX = 1.1e19 * u.Mx
+EPHEMERAL_FLUX_DENSITY = 1.5 * u.G
+#: Footpoint separation of an ephemeral region (chosen: young ERs are 5-10 Mm across).
+EPHEMERAL_SEPARATION = 7 * u.Mm
 
 
 @dataclass(frozen=True)
@@ -89,6 +103,11 @@ class SupergranularNetwork:
         Gaussian sigma of the lanes about the cell walls (1.5 Mm).
     coherence : float
         Weight in [0, 1] of the cells' own signs in the free part of the polarity (1).
+    ephemeral_flux_density : `~astropy.units.Quantity`
+        Unsigned flux density of the ephemeral regions, bipoles inside the
+        cells (`EPHEMERAL_FLUX_DENSITY`, 1.5 G; 0: none).  Their fluxes are
+        exponentially distributed about `EPHEMERAL_FLUX`, their footpoints
+        `EPHEMERAL_SEPARATION` apart in a random direction.
 
     Examples
     --------
@@ -107,6 +126,7 @@ class SupergranularNetwork:
     flux_index: float = 1.85
     lane_width: u.Quantity = 1.5 * u.Mm
     coherence: float = 1.0
+    ephemeral_flux_density: u.Quantity = EPHEMERAL_FLUX_DENSITY
 
     def __post_init__(self):
         for name, unit in (("cell_size", u.km), ("flux_density", u.G), ("lane_width", u.km)):
@@ -120,6 +140,9 @@ class SupergranularNetwork:
             raise ValueError(f"flux_index must be in (1, 3), got {self.flux_index!r}")
         if not 0 <= float(self.coherence) <= 1:
             raise ValueError(f"coherence must be in [0, 1], got {self.coherence!r}")
+        er = check_quantity(self.ephemeral_flux_density, u.G, "ephemeral_flux_density")
+        if np.ndim(er) or not er.value >= 0:
+            raise ValueError(f"ephemeral_flux_density must be a scalar >= 0, got {er}")
 
     def on_grid(self, longitude, latitude, large_scale, where=None):
         """
@@ -196,9 +219,45 @@ class SupergranularNetwork:
         p_positive = 0.5 * (1.0 + f + (1.0 - np.abs(f)) * lean)
         signs = np.where(stage_generator(root, "network", _SIGNS).uniform(size=fluxes.size) < p_positive,
                          1.0, -1.0)
+        flux = np.bincount(where, weights=signs * fluxes, minlength=weight.size).astype(float)
+        flux += self._ephemeral(root, centres, points, area, wall, lon, lat, inside, r_km)
         network = np.zeros(field.shape)
-        network[inside] = np.bincount(where, weights=signs * fluxes / area[where], minlength=weight.size)
+        network[inside] = flux / area
         if not unique[-1]:
             network[:, -1] = network[:, 0]
         carried = np.where(inside, np.clip(field, -b_net, b_net), 0.0)
         return field - carried + network
+
+    def _ephemeral(self, root, centres, points, area, wall, lon, lat, inside, r_km):
+        """Signed flux (Mx) per grid point of the region: bipoles emerging inside the cells."""
+        b_er = self.ephemeral_flux_density.to_value(u.G)
+        flux = np.zeros(points.shape[0])
+        if b_er == 0:
+            return flux
+        rng = stage_generator(root, "network", _EPHEMERAL)
+        mean = EPHEMERAL_FLUX.to_value(u.Mx)
+        n = int(rng.poisson(b_er * area.sum() / (2 * mean)))
+        # Inside the cells: away from the lanes, uniform in area.
+        interior = area * (1 - np.exp(-0.5 * (wall / self.lane_width.to_value(u.km)) ** 2))
+        at = rng.choice(points.shape[0], size=n, p=interior / interior.sum())
+        phi = rng.exponential(mean, size=n)
+        angle = rng.uniform(0, 2 * math.pi, size=n)
+        p = points[at]
+        east = np.cross([0.0, 0.0, 1.0], p)
+        east /= np.maximum(np.linalg.norm(east, axis=1), 1e-12)[:, None]
+        north = np.cross(p, east)
+        half = 0.5 * EPHEMERAL_SEPARATION.to_value(u.km) / r_km
+        offset = half * (np.cos(angle)[:, None] * east + np.sin(angle)[:, None] * north)
+        # Each footpoint to its nearest grid point of the region (uniform axes: index arithmetic).
+        index = -np.ones(inside.shape, dtype=np.int64)
+        index[inside] = np.arange(points.shape[0])
+        for sign, foot in ((1.0, p + offset), (-1.0, p - offset)):
+            foot /= np.linalg.norm(foot, axis=1)[:, None]
+            f_lat = np.arcsin(np.clip(foot[:, 2], -1, 1))
+            f_lon = np.arctan2(foot[:, 1], foot[:, 0])
+            i = np.clip(np.rint((f_lat - lat[0]) / (lat[1] - lat[0])).astype(np.int64), 0, lat.size - 1)
+            j = np.clip(np.rint((f_lon - lon[0]) / (lon[1] - lon[0])).astype(np.int64), 0, lon.size - 1)
+            k = index[i, j]
+            keep = k >= 0
+            flux += np.bincount(k[keep], weights=sign * phi[keep], minlength=flux.size).astype(float)
+        return flux
