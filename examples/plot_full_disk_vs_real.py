@@ -100,10 +100,11 @@ side_by_side(((zooms[0], "gongsynth: 200″ quiet region"), (zooms[1], "real GON
 # median taken out: the real file is a site file, ``DTYPE = RW``, before
 # GONG's zero-point correction, and its disk reads -2.4 G on average), the
 # noise in the quietest 60″ box near disk centre and from pixel differences,
-# the mean |B|, the 99th and 99.9th percentiles of |B − median|, the mean |B|
-# from disk centre to the limb and the spatial power spectra of the central
-# 640″; each also with the two maps' noise matched (white noise added to the
-# quieter one), since a KS distance alone mixes the Sun and the noise.
+# the mean :math:`|B|`, the 99th and 99.9th percentiles of
+# :math:`|B - \mathrm{median}|`, the mean :math:`|B|` from disk centre to the
+# limb and the spatial power spectra of the central 640″; each also with the
+# two maps' noise matched (white noise added to the quieter one), since a KS
+# distance alone mixes the Sun and the noise.
 
 print(report.statistics.summary())
 fig, axes = plt.subplots(1, 3, figsize=(14, 4), layout="constrained")

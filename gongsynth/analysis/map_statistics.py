@@ -339,8 +339,11 @@ def compare_statistics(sim_map, obs_map, *, seed=0, max_radius=0.98, box=640 * u
     rho = [disk_coordinates(m)[0] for m in (sim_map, obs_map)]
     first = _measure(sim_map, rho[0], max_radius, box, ring_edges)
     edges = first["spectrum"].edges      # every spectrum on the sim's annuli: ratios of like with like
-    measured = [first] + [_measure(m, r, max_radius, box, ring_edges, edges)
-                          for m, r in ((obs_map, rho[1]), (sim_matched, rho[0]), (obs_matched, rho[1]))]
+    second = _measure(obs_map, rho[1], max_radius, box, ring_edges, edges)
+    # The map that got no noise is measured once.
+    measured = [first, second] + [_measure(m, r, max_radius, box, ring_edges, edges) if extra else same
+                                  for m, r, extra, same in ((sim_matched, rho[0], added[0], first),
+                                                            (obs_matched, rho[1], added[1], second))]
     columns = {"map": list(_ROWS), "noise_added": [0.0, 0.0, added[0], added[1]]}
     for key in measured[0]["numbers"]:
         columns[key] = [m["numbers"][key] for m in measured]
