@@ -428,6 +428,7 @@ def test_command_line_compare(tmp_path, capsys):
     assert cli.main(["compare", str(sim), str(obs), "--out", str(out)]) == 0
     printed = capsys.readouterr().out
     assert "noise: robust sigma [G]" in printed and "KS distance" in printed
+    assert "KS, medians removed" in printed and "power ratio 5-100 Mm" in printed   # the statistics table
     assert out.stat().st_size > 10_000
     assert cli.main(["compare", str(sim), str(obs), "--out", str(out)]) == 3  # refuses to overwrite
     assert "overwrite" in capsys.readouterr().err
