@@ -370,7 +370,9 @@ def _plot(report, fig):
 
     limit = _DISPLAY_LIMIT
     colours = {"sim": "C0", "obs": "C3"}
-    grid = fig.add_gridspec(2, 4, left=0.05, right=0.98, bottom=0.07, top=0.86, wspace=0.42, hspace=0.42)
+    ncols = 3 if report.statistics is None else 4       # a fourth column for the spectra and rings
+    grid = fig.add_gridspec(2, ncols, left=0.06 if ncols == 3 else 0.05, right=0.98, bottom=0.07, top=0.86,
+                            wspace=0.42, hspace=0.42)
     for i, (key, summ) in enumerate((("sim", report.sim), ("obs", report.obs))):
         ax = fig.add_subplot(grid[0, i], projection=summ.map)
         image = summ.map.plot(axes=ax, cmap="gray", norm=mcolors.Normalize(-limit, limit), title=False)
@@ -421,7 +423,7 @@ def _plot(report, fig):
     if report.statistics is not None:
         report.statistics.plot_spectra(fig.add_subplot(grid[1, 2]), colours)
         report.statistics.plot_rings(fig.add_subplot(grid[0, 3]), colours)
-    ax = fig.add_subplot(grid[1, 3])
+    ax = fig.add_subplot(grid[1, ncols - 1])
     ax.axis("off")
     ax.text(0, 1, report.summary(figure=True), family="monospace", fontsize=7, va="top", ha="left",
             transform=ax.transAxes)
@@ -517,7 +519,7 @@ def compare(sim_map, obs_map, *, instrument=None, degrade="auto", labels=("simul
         if fig is None:
             from matplotlib.figure import Figure
 
-            fig = Figure(figsize=(17, 8))
+            fig = Figure(figsize=(13, 8) if stats is None else (17, 8))
         report.figure = _plot(report, fig)
     return report
 
