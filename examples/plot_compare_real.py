@@ -126,7 +126,7 @@ sim = gongsynth.simulate(mode="full-disk", duration=1 * u.min, seed=2, progress=
 # is a calibration target, not a forecast of the solar cycle.
 
 report = compare(sim, mdi, labels=("gongsynth full disk", "MDI at GONG resolution"),
-                 fig=plt.figure(figsize=(13, 8)))
+                 fig=plt.figure(figsize=(13, 8)), statistics=False)
 print(report.summary())
 
 # %%

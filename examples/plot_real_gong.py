@@ -71,7 +71,8 @@ for label, smap in (("real", real), ("simulated", simulated)):
 # %%
 # Measured the same way
 # ---------------------
-report = compare(simulated, real, labels=("gongsynth", "GONG Big Bear"), fig=plt.figure(figsize=(13, 8)))
+report = compare(simulated, real, labels=("gongsynth", "GONG Big Bear"), fig=plt.figure(figsize=(13, 8)),
+                 statistics=False)
 print(report.summary())
 plt.show()
 

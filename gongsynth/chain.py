@@ -259,7 +259,8 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
                                            surface_field=large_scale_field(config, surface_field,
                                                                            obstime=pointing.obstime),
                                            seed=child_sequence(config.seed, "scene"),
-                                           site=site_location(config.site), pointing=config.pointing)
+                                           site=site_location(config.site), pointing=config.pointing,
+                                           network=_network(config))
             return {"light": light, "truth_scene": truth}
 
         stages.append(Stage("scene", ("photosphere",), ("light", "truth_scene"), disk_scene,
@@ -371,6 +372,14 @@ def line_of(instrument):
         (the key of its line registry).
     """
     return {} if instrument.line == DEFAULT_RT_LINE else {"line": instrument.line}
+
+
+def _network(config):
+    """The full disk's supergranular network (stream ``"network"`` of the run's seed), or None."""
+    if not config.network:
+        return None
+    from gongsynth.sun.surface_field.network import SupergranularNetwork
+    return SupergranularNetwork(seed=child_sequence(config.seed, "network"))
 
 
 #: The radiative transfer's default line (its line registry's key).

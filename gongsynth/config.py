@@ -77,6 +77,8 @@ _DOCS = {
     "dark_sha256": "SHA-256 of that dark, checked when the run is repeated",
     "site": f"the observer's ground site, a GONG site {sorted(GONG_SITES)}; unset: the Earth's centre",
     "like": "a real GONG full-disk FITS file whose date, site, plate scale and pointing the run takes",
+    "network": "full-disk mode: lay the magnetic network on supergranular cells over the large-scale field "
+               "(true; false: the field as it is)",
 }
 
 
@@ -320,6 +322,10 @@ class SimulationConfig:
     like : str or None
         A real GONG file whose date, site, plate scale and pointing the run
         took (see `gongsynth.observing.like_gong`; keys given explicitly win).
+    network : bool
+        Full-disk mode: lay the magnetic network on supergranular cells
+        (`gongsynth.sun.surface_field.network`) over the large-scale field
+        (default True); no effect in tiled mode.
     pointing : tuple of `~astropy.units.Quantity`
         Full-disk mode: helioprojective (Tx, Ty) of the detector's centre
         (default (0, 0): the Sun's centre on the detector's centre; a real
@@ -364,8 +370,11 @@ class SimulationConfig:
     like: str | None = None
     pointing: tuple = (0 * u.arcsec, 0 * u.arcsec)
     instrument: object = field(default_factory=instruments.get)
+    network: bool = True
 
     def __post_init__(self):
+        if not isinstance(self.network, bool):
+            raise ValueError(f"network must be true or false, got {self.network!r}")
         if self.sun is None and self.mode in MODES:
             object.__setattr__(self, "sun", default_sun(self.mode))
         if self.sun not in SUNS:

@@ -287,7 +287,7 @@ def test_compare_two_noise_maps_numbers():
     rng = np.random.default_rng(3)
     a = np.where(rho < 1, rng.normal(0, 3.0, rho.shape), np.nan)
     b = np.where(rho < 1, rng.normal(0, 6.0, rho.shape), np.nan)
-    report = compare(hpc_map(a, 2.5), hpc_map(b, 2.5), plot=False)
+    report = compare(hpc_map(a, 2.5), hpc_map(b, 2.5), plot=False, statistics=False)
     assert isinstance(report, ComparisonReport)
     assert not report.sim.degraded and not report.obs.degraded
     assert report.ratios["noise_median_std"] == pytest.approx(0.5, rel=0.03)
@@ -308,7 +308,7 @@ def test_compare_simulated_gong_format_with_real_mdi(tmp_path, mdi):
     rng = np.random.default_rng(8)
     sim_path = write_gong_fits(tmp_path / "sim.fits", rng.normal(0, 3.0, (860, 860)))
     sim = load_observation(sim_path)
-    report = compare(sim, mdi, labels=("GONG-format", "MDI"))
+    report = compare(sim, mdi, labels=("GONG-format", "MDI"), statistics=False)
     assert report.obs.degraded and not report.sim.degraded
     assert report.obs.pixel_scale.to_value(u.arcsec) == pytest.approx(2.5)
     assert report.sim.noise.sigma.to_value(u.G) == pytest.approx(3.0, rel=0.10)
@@ -340,15 +340,15 @@ def test_compare_files_writes_figure_and_refuses_overwrite(tmp_path):
     sim = write_gong_fits(tmp_path / "sim.fits", rng.normal(0, 3.0, rho.shape))
     obs = write_gong_fits(tmp_path / "obs.fits", rng.normal(0, 5.0, rho.shape))
     out = tmp_path / "compare.png"
-    report = compare_files(sim, obs, out=out)
+    report = compare_files(sim, obs, out=out, statistics=False)   # the table: test_command_line_compare
     assert out.stat().st_size > 10_000
     assert report.ratios["noise_median_std"] == pytest.approx(0.6, rel=0.05)
     assert "sim.fits" in report.sim.label and "obs.fits" in report.obs.label
     with pytest.raises(FileExistsError, match="overwrite"):
         compare_files(sim, obs, out=out)
-    compare_files(sim, obs, out=out, overwrite=True)
+    compare_files(sim, obs, out=out, overwrite=True, statistics=False)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["compare.png", "obs.fits", "sim.fits"]
-    assert compare_files(sim, obs).figure is None
+    assert compare_files(sim, obs, statistics=False).figure is None
     with pytest.raises(FileNotFoundError, match="folder"):
         compare_files(sim, obs, out=tmp_path / "missing" / "c.png")
 
@@ -407,7 +407,7 @@ def test_gongsynth_product_file_compared_off_disk_centre(tmp_path):
     assert type(loaded).__name__ == "GONGSynthMap" and loaded.unit == u.G
     with pytest.raises(ValueError, match="no 24x24-pixel box"):
         noise_estimate(loaded)
-    report = compare(loaded, loaded, plot=False)
+    report = compare(loaded, loaded, plot=False, statistics=False)
     assert report.sim.noise.layout == "tiles"
     assert report.sim.noise.median_std.to_value(u.G) == pytest.approx(3.0, rel=0.05)
     cont = maps.make_product_map(np.ones((40, 40)) * u.adu, centre=centre, scale=2.5 * u.arcsec,
@@ -427,6 +427,7 @@ def test_command_line_compare(tmp_path, capsys):
     assert cli.main(["compare", str(sim), str(obs), "--out", str(out)]) == 0
     printed = capsys.readouterr().out
     assert "noise: robust sigma [G]" in printed and "KS distance" in printed
+    assert "KS, medians removed" in printed and "power ratio 5-100 Mm" in printed   # the statistics table
     assert out.stat().st_size > 10_000
     assert cli.main(["compare", str(sim), str(obs), "--out", str(out)]) == 3  # refuses to overwrite
     assert "overwrite" in capsys.readouterr().err

@@ -19,6 +19,7 @@ uses from its neighbours, the file reading and header checks
 (`gongsynth.analysis.degrade`).
 """
 import json
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -37,8 +38,10 @@ from gongsynth.analysis.limb import (
     compare_limb_darkening,
     limb_darkening,
 )
+from gongsynth.analysis.map_statistics import compare_statistics, quiet_noise
 from gongsynth.analysis.noise import disk_centre_level, noise_estimate
 from gongsynth.analysis.observations import BadHeaderWarning, load_observation
+from gongsynth.analysis.power_spectrum import power_spectrum
 from gongsynth.analysis.statistics import field_histogram, histogram_of_values
 from gongsynth.files import atomic_path, check_writable
 
@@ -57,6 +60,8 @@ __all__ = [
     "summarize_map",
     "compare",
     "compare_files",
+    "compare_statistics",
+    "power_spectrum",
     "LimbDarkeningComparison",
     "compare_limb_darkening",
 ]
@@ -208,20 +213,10 @@ def summarize_map(smap, label, *, instrument=None, degrade="auto", noise_box=60 
         degraded=degraded,
         histogram=histogram_of_values(values, u.G),
         abs_histogram=histogram_of_values(values, u.G, absolute=True),
-        noise=_noise(smap, noise_box),
+        noise=quiet_noise(smap, noise_box),
         map=smap,
         values=values,
     )
-
-
-def _noise(smap, box):
-    """Quiet-box noise near disk centre; on a field away from disk centre, boxes anywhere on the disk."""
-    try:
-        return noise_estimate(smap, box=box)
-    except ValueError:
-        # No grid box near disk centre lies on this map (e.g. a field at high latitude):
-        # tile the map instead; NoiseEstimate.layout records it.
-        return noise_estimate(smap, box=box, layout="tiles", max_radius=1.0)
 
 
 def _cdf_distance(h1, h2):
@@ -253,6 +248,11 @@ class ComparisonReport:
         The same distance measured on the binned histograms (the signed
         histograms' common edges, 5 G bins by default; NaN if the edges
         differ): what a comparison of published histograms can give.
+    statistics : `~gongsynth.analysis.map_statistics.StatisticsComparison` or None
+        KS distances (medians removed too), noise, mean |B|, percentiles of
+        |B - median|, mean |B| by centre-to-limb ring and the spatial power
+        spectra, as measured and with the noise matched (`compare_statistics`);
+        None if the central box of a map is too small for a spectrum.
     figure : `matplotlib.figure.Figure` or None
     """
 
@@ -262,6 +262,7 @@ class ComparisonReport:
     ks_statistic: float
     ks_pvalue: float
     cdf_distance: float
+    statistics: object = None
     figure: object = None
 
     def to_dict(self):
@@ -357,6 +358,9 @@ class ComparisonReport:
         lines.append(f"{'KS distance of B':{width}}  {self.ks_statistic:>{col}.3f}")
         lines.append(f"{'KS p-value':{width}}  {self.ks_pvalue:>{col}.3g}")
         lines.append(f"{'noise ratio sim/obs':{width}}  {self.ratios['noise_sigma']:>{col}.3f}")
+        if not figure and self.statistics is not None:
+            lines += ["", "statistics (compare_statistics; 'matched': white noise added to the quieter map)",
+                      self.statistics.summary()]
         return "\n".join(lines)
 
 
@@ -366,7 +370,9 @@ def _plot(report, fig):
 
     limit = _DISPLAY_LIMIT
     colours = {"sim": "C0", "obs": "C3"}
-    grid = fig.add_gridspec(2, 3, left=0.06, right=0.98, bottom=0.07, top=0.86, wspace=0.42, hspace=0.42)
+    ncols = 3 if report.statistics is None else 4       # a fourth column for the spectra and rings
+    grid = fig.add_gridspec(2, ncols, left=0.06 if ncols == 3 else 0.05, right=0.98, bottom=0.07, top=0.86,
+                            wspace=0.42, hspace=0.42)
     for i, (key, summ) in enumerate((("sim", report.sim), ("obs", report.obs))):
         ax = fig.add_subplot(grid[0, i], projection=summ.map)
         image = summ.map.plot(axes=ax, cmap="gray", norm=mcolors.Normalize(-limit, limit), title=False)
@@ -414,7 +420,10 @@ def _plot(report, fig):
     _plot_histograms(fig.add_subplot(grid[1, 1]), report, colours, "abs_histogram", "|B_LOS| [G]",
                      "on-disk |B| histogram", log_x=True)
 
-    ax = fig.add_subplot(grid[1, 2])
+    if report.statistics is not None:
+        report.statistics.plot_spectra(fig.add_subplot(grid[1, 2]), colours)
+        report.statistics.plot_rings(fig.add_subplot(grid[0, 3]), colours)
+    ax = fig.add_subplot(grid[1, ncols - 1])
     ax.axis("off")
     ax.text(0, 1, report.summary(figure=True), family="monospace", fontsize=7, va="top", ha="left",
             transform=ax.transAxes)
@@ -423,7 +432,7 @@ def _plot(report, fig):
 
 
 def compare(sim_map, obs_map, *, instrument=None, degrade="auto", labels=("simulated", "observed"),
-            noise_box=60 * u.arcsec, plot=True, fig=None):
+            noise_box=60 * u.arcsec, plot=True, fig=None, statistics=True, seed=0):
     """
     Compare a simulated GONG magnetogram with an observed one: numbers and a figure.
 
@@ -433,7 +442,8 @@ def compare(sim_map, obs_map, *, instrument=None, degrade="auto", labels=("simul
     (mean, mean |B|, std, robust sigma, percentiles), quiet-box noise near
     disk centre (robust sigma, std, pixel difference), their ratios and the
     two-sample Kolmogorov-Smirnov statistic and p-value of the two
-    distributions of B (`scipy.stats.ks_2samp`).
+    distributions of B (`scipy.stats.ks_2samp`); and, with ``statistics``,
+    the table of `~gongsynth.analysis.map_statistics.compare_statistics`.
 
     Parameters
     ----------
@@ -449,8 +459,15 @@ def compare(sim_map, obs_map, *, instrument=None, degrade="auto", labels=("simul
     plot : bool
         Draw the side-by-side figure.
     fig : `matplotlib.figure.Figure`, optional
-        Figure to draw into (e.g. ``plt.figure(figsize=(13, 8))`` to show it
+        Figure to draw into (e.g. ``plt.figure(figsize=(17, 8))`` to show it
         with pyplot); default a new stand-alone Figure.
+    statistics : bool
+        Also measure `~gongsynth.analysis.map_statistics.compare_statistics`
+        (KS distances with medians removed, percentiles of |B - median|, mean
+        |B| by ring, spatial power spectra; each also with the noise matched):
+        ``report.statistics``, and the spectra and rings in the figure.
+    seed : int
+        Seed of the noise that matches the two maps' noise (statistics only).
 
     Returns
     -------
@@ -468,7 +485,7 @@ def compare(sim_map, obs_map, *, instrument=None, degrade="auto", labels=("simul
     ...                                     unit=u.G)
     >>> a = sunpy.map.Map(rng.normal(0, 3, (200, 200)), hdr)
     >>> b = sunpy.map.Map(rng.normal(0, 6, (200, 200)), hdr)
-    >>> report = compare(a, b, plot=False)
+    >>> report = compare(a, b, plot=False, statistics=False)
     >>> round(report.ratios["noise_median_std"], 1)
     0.5
     >>> table = report.to_table()
@@ -490,18 +507,25 @@ def compare(sim_map, obs_map, *, instrument=None, degrade="auto", labels=("simul
                   and np.allclose(sim.histogram.edges.to_value(u.G), obs.histogram.edges.to_value(u.G)))
     distance = _cdf_distance(sim.histogram, obs.histogram) if same_edges else float("nan")
     ks = scipy.stats.ks_2samp(sim.values, obs.values)
+    stats = None
+    if statistics:
+        try:
+            stats = compare_statistics(sim.map, obs.map, seed=seed)
+        except ValueError as error:   # e.g. a field too small for the spectrum's central box
+            warnings.warn(f"compare: no statistics table ({error})", stacklevel=2)
     report = ComparisonReport(sim=sim, obs=obs, ratios=ratios, ks_statistic=float(ks.statistic),
-                              ks_pvalue=float(ks.pvalue), cdf_distance=distance)
+                              ks_pvalue=float(ks.pvalue), cdf_distance=distance, statistics=stats)
     if plot:
         if fig is None:
             from matplotlib.figure import Figure
 
-            fig = Figure(figsize=(13, 8))
+            fig = Figure(figsize=(13, 8) if stats is None else (17, 8))
         report.figure = _plot(report, fig)
     return report
 
 
-def compare_files(sim_path, obs_path, *, out=None, overwrite=False, instrument=None, degrade="auto"):
+def compare_files(sim_path, obs_path, *, out=None, overwrite=False, instrument=None, degrade="auto",
+                  statistics=True):
     """
     Compare a simulated and an observed magnetogram FITS file (``gongsynth compare``).
 
@@ -517,6 +541,8 @@ def compare_files(sim_path, obs_path, *, out=None, overwrite=False, instrument=N
         Replace an existing ``out``.
     instrument : `~gongsynth.GONGInstrument`, optional
     degrade : {"auto", True, False}
+        See `compare`.
+    statistics : bool
         See `compare`.
 
     Returns
@@ -560,7 +586,7 @@ def compare_files(sim_path, obs_path, *, out=None, overwrite=False, instrument=N
     obs = load_observation(obs_path, kind="magnetogram")
     labels = (f"simulated ({Path(sim_path).name})", f"observed ({Path(obs_path).name})")
     report = compare(sim, obs, instrument=instrument, degrade=degrade, labels=labels,
-                     plot=out is not None)
+                     plot=out is not None, statistics=statistics)
     if out is not None:
         with atomic_path(out, overwrite=overwrite) as tmp:
             report.figure.savefig(tmp, dpi=110, format=image_format)
@@ -595,3 +621,4 @@ def _plot_histograms(ax, report, colours, attribute, xlabel, title, *, log_x=Fal
     ax.tick_params(labelsize=7)
     ax.set_title(title, fontsize=9)
     ax.legend(fontsize=8)
+

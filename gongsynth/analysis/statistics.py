@@ -25,7 +25,7 @@ from astropy.stats import mad_std
 from astropy.table import QTable
 
 from gongsynth.analysis.disk import disk_coordinates as disk_coordinates  # re-exported (was here)
-from gongsynth.analysis.disk import disk_values
+from gongsynth.analysis.disk import disk_values, map_values
 from gongsynth.analysis.disk import local_pixel_scale as local_pixel_scale  # re-exported (was here)
 
 __all__ = [
@@ -36,6 +36,11 @@ __all__ = [
     "FieldHistogram",
     "field_histogram",
     "histogram_of_values",
+    "TAIL_PERCENTILES",
+    "tail_percentiles",
+    "RING_EDGES",
+    "ring_means",
+    "rings_of_values",
 ]
 
 #: Ratio of the standard deviation to the median absolute deviation of a
@@ -336,3 +341,109 @@ def histogram_of_values(values, unit, bins=None, absolute=False):
         percentiles={1: p1 * unit, 50: p50 * unit, 99: p99 * unit},
         absolute=bool(absolute),
     )
+
+
+#: Percentiles of |B - median| that `tail_percentiles` reports: the strong network and plage pixels.
+TAIL_PERCENTILES = (99.0, 99.9)
+
+#: Centre-to-limb rings of `ring_means`, in solar radii.
+RING_EDGES = (0.0, 0.2, 0.4, 0.6, 0.8, 0.9, 0.95, 0.98)
+
+
+def tail_percentiles(values, percentiles=TAIL_PERCENTILES):
+    """
+    Percentiles of |value - median|: how strong the strongest pixels are, whatever the zero point.
+
+    Parameters
+    ----------
+    values : array_like or `~astropy.units.Quantity`
+        Any shape; NaN and infinities are ignored.
+    percentiles : sequence of float
+        In [0, 100] (default 99 and 99.9).
+
+    Returns
+    -------
+    dict
+        ``{percentile: value}`` in the unit of ``values``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> x = np.random.default_rng(3).normal(5, 2, 1_000_000)
+    >>> round(float(tail_percentiles(x)[99.0]) / 2, 1)    # 2.576 sigma for a Gaussian
+    2.6
+    """
+    unit = getattr(values, "unit", None)
+    v = np.asarray(getattr(values, "value", values), dtype=np.float64).ravel()
+    v = v[np.isfinite(v)]
+    q = np.asarray(percentiles, dtype=float)
+    if q.ndim != 1 or not np.all((q >= 0) & (q <= 100)):
+        raise ValueError(f"percentiles must be numbers in [0, 100], got {percentiles!r}")
+    result = np.percentile(np.abs(v - np.median(v)), q) if v.size else np.full(q.shape, np.nan)
+    return {float(p): (r * unit if unit is not None else float(r)) for p, r in zip(q, result)}
+
+
+def ring_means(smap, edges=RING_EDGES):
+    """
+    Mean |value| of a map in rings from disk centre to the limb.
+
+    Parameters
+    ----------
+    smap : `~sunpy.map.GenericMap`
+        A magnetogram (or any map); rings in units of the apparent solar radius.
+    edges : sequence of float
+        Increasing ring edges in solar radii (default `RING_EDGES`).
+
+    Returns
+    -------
+    `~astropy.table.QTable`
+        Columns ``r_inner``, ``r_outer`` (solar radii), ``mean_abs`` (map
+        unit; NaN for an empty ring) and ``pixels``.
+
+    Examples
+    --------
+    >>> import astropy.units as u, numpy as np, sunpy.map
+    >>> from astropy.coordinates import SkyCoord
+    >>> from sunpy.coordinates import frames
+    >>> ref = SkyCoord(0 * u.arcsec, 0 * u.arcsec, frame=frames.Helioprojective,
+    ...                observer="earth", obstime="2020-01-01")
+    >>> m = sunpy.map.Map(-2 * np.ones((64, 64)), sunpy.map.make_fitswcs_header(
+    ...     (64, 64), ref, scale=[32, 32] * u.arcsec / u.pix, unit=u.G))
+    >>> ring_means(m, (0, 0.5, 1))["mean_abs"]
+    <Quantity [2., 2.] G>
+    """
+    e = np.asarray(edges, dtype=float)
+    if e.ndim != 1 or e.size < 2 or np.any(np.diff(e) <= 0) or e[0] < 0:
+        raise ValueError(f"edges must be >= 2 increasing radii >= 0 (solar radii), got {edges!r}")
+    unit = smap.unit if smap.unit is not None else u.one
+    return rings_of_values(map_values(smap), disk_coordinates(smap)[0], e, unit)
+
+
+def rings_of_values(data, rho, edges, unit):
+    """
+    `ring_means` of an image whose distances from disk centre are known (what it does after finding them).
+
+    Parameters
+    ----------
+    data, rho : `numpy.ndarray`
+        (ny, nx) values and distances from disk centre (solar radii; NaN where undefined).
+    edges : `numpy.ndarray`
+        Increasing ring edges, solar radii.
+    unit : `~astropy.units.Unit`
+        Unit of ``data``.
+
+    Returns
+    -------
+    `~astropy.table.QTable`
+        As for `ring_means`.
+    """
+    e = np.asarray(edges, dtype=float)
+    with np.errstate(invalid="ignore"):
+        good = np.isfinite(data) & np.isfinite(rho)
+    ring = np.digitize(rho[good], e) - 1
+    inside = (ring >= 0) & (ring < e.size - 1)
+    pixels = np.bincount(ring[inside], minlength=e.size - 1)
+    total = np.bincount(ring[inside], weights=np.abs(data[good][inside]), minlength=e.size - 1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean = np.where(pixels > 0, total / np.maximum(pixels, 1), np.nan)
+    return QTable({"r_inner": e[:-1], "r_outer": e[1:], "mean_abs": mean * unit, "pixels": pixels})

@@ -43,7 +43,7 @@ def _scene_seed(seed):
 
 def library_scene(library, *, obstime=None, instrument=None, detector_shape=None, supersampling=None,
                   surface_field=None, seed=0, site=None, velocities=True, cell_size=30 * u.Mm,
-                  pointing=None):
+                  pointing=None, network=None):
     """
     The light and true B·n of the whole disk from a patch library.
 
@@ -73,6 +73,8 @@ def library_scene(library, *, obstime=None, instrument=None, detector_shape=None
         Side of the surface cells (default 30 Mm).
     pointing : `~astropy.units.Quantity`, optional
         Helioprojective (Tx, Ty) of the detector's centre (default the Sun's centre).
+    network : `~gongsynth.sun.surface_field.network.SupergranularNetwork`, optional
+        The magnetic network laid on the large-scale field (`large_scale_grid`).
 
     Returns
     -------
@@ -115,7 +117,8 @@ def library_scene(library, *, obstime=None, instrument=None, detector_shape=None
     scale = inst.plate_scale / supersampling
     large = large_scale_grid(time, surface_field, site=site, rotation=terms["rotation"],
                              observer=terms["observer"],
-                             blueshift=CONVECTIVE_BLUESHIFT_FE6302 if terms["blueshift"] else None)
+                             blueshift=CONVECTIVE_BLUESHIFT_FE6302 if terms["blueshift"] else None,
+                             network=network)
     light = np.zeros((len(inst.analysers),) + grid, dtype=np.float32)
     blos = np.zeros(grid, dtype=np.float32)
     to_earth = radiance_at_earth(1 * CHANNEL_UNIT)

@@ -118,7 +118,7 @@ class _Synthesiser:
 def full_disk_scene(source, *, obstime=None, instrument=None, detector_shape=None,
                     supersampling=None, wavelength=None, mueller=None, chunk_size=65536,
                     progress=False, surface_field=None, seed=0, site=None, velocities=True,
-                    cell_size=DEFAULT_CELL, pointing=None):
+                    cell_size=DEFAULT_CELL, pointing=None, network=None):
     """
     A synthetic full-disk scene and its ground truth.
 
@@ -173,6 +173,9 @@ def full_disk_scene(source, *, obstime=None, instrument=None, detector_shape=Non
     pointing : `~astropy.units.Quantity`, optional
         Helioprojective (Tx, Ty) of the detector's centre (default the Sun's
         centre; `gongsynth.observing.like_gong` reads a real GONG image's).
+    network : `~gongsynth.sun.surface_field.network.SupergranularNetwork`, optional
+        Library only: the magnetic network on supergranular cells that
+        carries the large-scale field's quiet part; None: none.
 
     Returns
     -------
@@ -201,9 +204,9 @@ def full_disk_scene(source, *, obstime=None, instrument=None, detector_shape=Non
                              "build_library, not to full_disk_scene")
         return library_scene(source, obstime=obstime, instrument=inst, detector_shape=detector_shape,
                              supersampling=supersampling, surface_field=surface_field, seed=seed, site=site,
-                             velocities=velocities, cell_size=cell_size, pointing=pointing)
-    if surface_field is not None or site is not None:
-        raise ValueError("surface_field and site need a PatchLibrary source")
+                             velocities=velocities, cell_size=cell_size, pointing=pointing, network=network)
+    if surface_field is not None or site is not None or network is not None:
+        raise ValueError("surface_field, site and network need a PatchLibrary source")
     if supersampling is None:
         supersampling = inst.supersampling
     if isinstance(supersampling, bool) or not isinstance(supersampling, (int, np.integer)) \

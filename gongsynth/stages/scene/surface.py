@@ -4,7 +4,9 @@ The large scales of a full-disk scene on a heliographic grid: the radial field a
 `large_scale_grid` puts on one regular Stonyhurst (longitude, latitude) grid,
 for the run's date and observer:
 
-- the radial flux density B_r of a heliographic `sunpy.map.Map`: a
+- the radial flux density B_r of a heliographic `sunpy.map.Map` (its quiet
+  part carried by the supergranular network when one is given,
+  `gongsynth.sun.surface_field.network`): a
   `gongsynth.sun.surface_field` map through its own
   `~gongsynth.sun.surface_field.surface_field_at` (differential rotation
   from the map's date to the run's), any other (Carrington or Stonyhurst,
@@ -128,7 +130,7 @@ def sample_surface_field(smap, longitude, latitude, obstime=None):
 
 
 def large_scale_grid(obstime=None, surface_field=None, *, step=0.25 * u.deg, site=None,
-                     rotation=True, observer=True, blueshift=CONVECTIVE_BLUESHIFT_FE6302):
+                     rotation=True, observer=True, blueshift=CONVECTIVE_BLUESHIFT_FE6302, network=None):
     """
     The radial field and the large-scale velocity on a regular Stonyhurst grid.
 
@@ -147,6 +149,9 @@ def large_scale_grid(obstime=None, surface_field=None, *, step=0.25 * u.deg, sit
         Include the solar rotation and the observer's motion.
     blueshift : tuple or None
         Convective-blueshift table (`gongsynth.sun.rotation.convective_blueshift`), None for none.
+    network : `~gongsynth.sun.surface_field.network.SupergranularNetwork`, optional
+        Lays the magnetic network on the grid: the field's quiet part carried
+        by flux concentrations on supergranular cell walls; None: the field as it is.
 
     Returns
     -------
@@ -182,10 +187,14 @@ def large_scale_grid(obstime=None, surface_field=None, *, step=0.25 * u.deg, sit
     rlat, rlon = np.radians(glat), np.radians(glon)
     point = np.stack([np.cos(rlat) * np.cos(rlon), np.cos(rlat) * np.sin(rlon), np.sin(rlat)])
     sight = np.array([distance * np.cos(b0), 0.0, distance * np.sin(b0)])[:, None, None] - point
-    mu = np.clip((point * sight).sum(axis=0) / np.sqrt((sight ** 2).sum(axis=0)), 0.0, 1.0)
+    facing = (point * sight).sum(axis=0) / np.sqrt((sight ** 2).sum(axis=0))
+    mu = np.clip(facing, 0.0, 1.0)
+    if network is not None:   # on the visible side and a degree beyond: the scene samples nothing else
+        field = network.on_grid(lon, lat, field, where=facing > -0.02)
     velocity = disk_velocity(glon * u.deg, glat * u.deg, mu, time, site=site, rotation=rotation,
                              observer=observer, blueshift=blueshift).to_value(u.m / u.s)
     meta = {"obstime": time.isot, "step_deg": dstep, "surface_field": None if surface_field is None
             else str(getattr(surface_field, "name", "map")), "site": None if site is None else str(site),
-            "rotation": bool(rotation), "observer": bool(observer), "blueshift": blueshift is not None}
+            "rotation": bool(rotation), "observer": bool(observer), "blueshift": blueshift is not None,
+            "network": None if network is None else repr(network)}
     return LargeScale(longitude=lon, latitude=lat, field=field, velocity=velocity, meta=meta)

@@ -1,0 +1,377 @@
+"""
+The statistics a solar physicist compares between two magnetograms, with and without matching their noise.
+
+`compare_statistics` measures two maps the same way (after `gongsynth.compare`
+has degraded the finer one to GONG): the two-sample Kolmogorov-Smirnov
+distance of their on-disk pixel values (as they are and with each map's
+median taken out: a site file's zero point is not the Sun's), the
+quiet-box and pixel-difference noise (`gongsynth.analysis.noise`), the mean
+and the 99th and 99.9th percentiles of |B - median|
+(`gongsynth.analysis.statistics.tail_percentiles`), the mean |B| in rings
+from disk centre to the limb (`~gongsynth.analysis.statistics.ring_means`)
+and the azimuthally averaged spatial power spectrum of the central region
+(`gongsynth.analysis.power_spectrum`).
+
+A seeded Sun and a real map differ in their noise as well as in their Sun;
+the noise fills the core of the histogram, so a KS distance or a mean |B|
+alone mixes the two.  Every number is therefore also given **with the noise
+matched**: white Gaussian noise of variance σ_hi² − σ_lo² (σ: the
+pixel-difference noise of the quietest box near disk centre, the measure
+of white noise that ignores structure) is added to the quieter map, with a
+fixed seed, and everything is measured again.  This is a diagnostic, not a model of the instrument.
+"""
+from dataclasses import dataclass
+
+import astropy.units as u
+import numpy as np
+import scipy.stats
+import sunpy.map
+from astropy.table import QTable
+
+from gongsynth.analysis.disk import check_map, disk_coordinates, map_values
+from gongsynth.analysis.noise import noise_estimate
+from gongsynth.analysis.power_spectrum import power_spectrum
+from gongsynth.analysis.statistics import RING_EDGES, rings_of_values, tail_percentiles
+
+__all__ = ["StatisticsComparison", "compare_statistics", "match_noise", "quiet_noise", "SPECTRUM_BAND"]
+
+#: The range of scales over which the spectra are compared (5-100 Mm: granular noise to
+#: the supergranular network and the unipolar patches).
+SPECTRUM_BAND = (5 * u.Mm, 100 * u.Mm)
+
+_ROWS = ("sim", "obs", "sim, noise matched", "obs, noise matched")
+
+
+def match_noise(sim_map, obs_map, *, seed=0):
+    """
+    Add white noise to the quieter of two maps so that both have the same pixel-difference noise.
+
+    Parameters
+    ----------
+    sim_map, obs_map : `~sunpy.map.GenericMap`
+        Magnetograms in G.
+    seed : int
+        Seed of the added noise.
+
+    Returns
+    -------
+    sim, obs : `~sunpy.map.GenericMap`
+        The maps, one of them with noise added (NaN pixels stay NaN).
+    added : (float, float)
+        Standard deviation of the noise added to each, G (one of them 0).
+
+    Examples
+    --------
+    >>> import numpy as np, astropy.units as u, sunpy.map
+    >>> from astropy.coordinates import SkyCoord
+    >>> from sunpy.coordinates import frames
+    >>> ref = SkyCoord(0 * u.arcsec, 0 * u.arcsec, frame=frames.Helioprojective,
+    ...                observer="earth", obstime="2020-01-01")
+    >>> hdr = sunpy.map.make_fitswcs_header((300, 300), ref, scale=[2.5, 2.5] * u.arcsec / u.pix,
+    ...                                     unit=u.G)
+    >>> rng = np.random.default_rng(1)
+    >>> a, b = (sunpy.map.Map(rng.normal(0, s, (300, 300)), hdr) for s in (3, 5))
+    >>> a2, _, added = match_noise(a, b)
+    >>> [round(x) for x in added]
+    [4, 0]
+    >>> round(_difference_noise(a2) / _difference_noise(b), 2)
+    1.0
+    """
+    sigma = [_difference_noise(m) for m in (sim_map, obs_map)]
+    low = int(np.argmin(sigma))
+    maps = [sim_map, obs_map]
+    added = [0.0, 0.0]
+    target, start = sigma[1 - low] ** 2, sigma[low] ** 2
+    if target > start:
+        m = maps[low]
+        data = map_values(m)
+        unit_noise = np.random.default_rng(seed).normal(0.0, 1.0, data.shape)
+        # The quietest box's variance grows linearly with the added variance, with a slope a little
+        # below 1 (the box is picked as the quietest: 0.94² for white noise); one measurement fixes it.
+        trial = target - start
+        slope = (_difference_noise(sunpy.map.Map(data + np.sqrt(trial) * unit_noise, m.meta)) ** 2
+                 - start) / trial
+        extra = float(np.sqrt(trial / max(slope, 0.5)))
+        maps[low] = sunpy.map.Map(data + extra * unit_noise, m.meta)
+        added[low] = extra
+    return maps[0], maps[1], tuple(added)
+
+
+def _difference_noise(smap):
+    """The quietest box's pixel-difference noise, G."""
+    return float(quiet_noise(smap).difference.to_value(u.G))
+
+
+def quiet_noise(smap, box=60 * u.arcsec):
+    """
+    Quiet-box noise near disk centre; on a field away from disk centre, boxes anywhere on the disk.
+
+    Parameters
+    ----------
+    smap : `~sunpy.map.GenericMap`
+    box : `~astropy.units.Quantity`
+        Box side (default 60″).
+
+    Returns
+    -------
+    `~gongsynth.analysis.noise.NoiseEstimate`
+        ``layout`` records which boxes were used.
+    """
+    try:
+        return noise_estimate(smap, box=box)
+    except ValueError:
+        # No grid box near disk centre lies on this map (e.g. a field at high latitude): tile the map.
+        return noise_estimate(smap, box=box, layout="tiles", max_radius=1.0)
+
+
+@dataclass(frozen=True)
+class StatisticsComparison:
+    """
+    The numbers of `compare_statistics`.
+
+    Attributes
+    ----------
+    table : `~astropy.table.QTable`
+        One row per map and condition (``map``: "sim", "obs", "sim, noise
+        matched", "obs, noise matched"); columns ``noise_added``,
+        ``noise_box`` (quietest-box robust sigma), ``noise_difference``,
+        ``mean``, ``median``, ``mean_abs``, ``std``, ``p99``, ``p999`` (99th
+        and 99.9th percentiles of |B - median|), all G; ``ks`` and
+        ``ks_centred``: the KS distance between the sim and obs rows of the
+        same condition (as they are, and medians removed).
+    rings : `~astropy.table.QTable`
+        ``r_inner``, ``r_outer`` (solar radii), ``pixels_sim``, ``pixels_obs``
+        and the mean |B| of each map and condition: ``sim``, ``obs``,
+        ``sim_matched``, ``obs_matched`` (G), with ``ratio`` and ``ratio_matched`` (sim / obs).
+    spectra : `~astropy.table.QTable`
+        ``wavelength`` (Mm) and the power of each map and condition (G² Mm²)
+        in the same columns, with ``ratio`` and ``ratio_matched``.
+    """
+
+    table: QTable
+    rings: QTable
+    spectra: QTable
+
+    def row(self, name):
+        """
+        One row of ``table`` as a dict of Quantities and floats.
+
+        Parameters
+        ----------
+        name : str
+            One of "sim", "obs", "sim, noise matched", "obs, noise matched".
+
+        Returns
+        -------
+        dict
+        """
+        if name not in _ROWS:
+            raise ValueError(f"row must be one of {_ROWS}, got {name!r}")
+        i = _ROWS.index(name)
+        return {key: self.table[key][i] for key in self.table.colnames if key != "map"}
+
+    def spectrum_ratio_range(self, band=SPECTRUM_BAND, *, matched=False):
+        """
+        Smallest and largest sim/obs power ratio over the annuli whose wavelengths lie in ``band``.
+
+        Parameters
+        ----------
+        band : (Quantity, Quantity)
+            Wavelength range (default 5-100 Mm).
+        matched : bool
+            With the noise matched.
+
+        Returns
+        -------
+        (float, float)
+        """
+        lam = self.spectra["wavelength"].to_value(u.Mm)
+        keep = (lam >= band[0].to_value(u.Mm)) & (lam <= band[1].to_value(u.Mm))
+        ratio = np.asarray(self.spectra["ratio_matched" if matched else "ratio"])[keep]
+        ratio = ratio[np.isfinite(ratio)]
+        return (float(ratio.min()), float(ratio.max())) if ratio.size else (np.nan, np.nan)
+
+    def summary(self):
+        """
+        A plain-text table of the numbers, without and with the noise matched.
+
+        Returns
+        -------
+        str
+        """
+        t = self.table
+        lines = [f"{'':26s}{'sim':>9s}{'obs':>9s}{'ratio':>8s}   "
+                 f"{'matched: sim':>12s}{'obs':>9s}{'ratio':>8s}"]
+        for key, name in (("noise_box", "quietest-box noise [G]"),
+                          ("noise_difference", "pixel-diff. noise [G]"), ("mean", "disk mean [G]"),
+                          ("mean_abs", "mean |B| [G]"), ("std", "std [G]"),
+                          ("p99", "99% |B-median| [G]"), ("p999", "99.9% |B-median| [G]")):
+            v = t[key].to_value(u.G)
+            lines.append(f"{name:26s}{v[0]:9.2f}{v[1]:9.2f}{v[0] / v[1]:8.2f}   "
+                         f"{v[2]:12.2f}{v[3]:9.2f}{v[2] / v[3]:8.2f}")
+        lines.append(f"{'KS distance':26s}{t['ks'][0]:9.3f}{'':17s}   {t['ks'][2]:12.3f}")
+        lines.append(f"{'KS, medians removed':26s}{t['ks_centred'][0]:9.3f}{'':17s}   "
+                     f"{t['ks_centred'][2]:12.3f}")
+        lo, hi = self.spectrum_ratio_range()
+        lo_m, hi_m = self.spectrum_ratio_range(matched=True)
+        lines.append(f"{'power ratio 5-100 Mm':26s}{lo:9.2f} to {hi:.2f}{'':6s}   {lo_m:12.2f} to {hi_m:.2f}")
+        for r in self.rings:
+            lines.append(f"{'mean |B| ' + f'{r['r_inner']:.2f}-{r['r_outer']:.2f} R':26s}"
+                         f"{r['sim'].to_value(u.G):9.2f}{r['obs'].to_value(u.G):9.2f}{r['ratio']:8.2f}   "
+                         f"{r['sim_matched'].to_value(u.G):12.2f}{r['obs_matched'].to_value(u.G):9.2f}"
+                         f"{r['ratio_matched']:8.2f}")
+        return "\n".join(lines)
+
+    def plot_spectra(self, ax, colours=None):
+        """
+        Draw both maps' spatial power spectra (solid) and with the noise matched (dashed).
+
+        Parameters
+        ----------
+        ax : `matplotlib.axes.Axes`
+        colours : dict, optional
+            ``{"sim": colour, "obs": colour}`` (default C0 and C3).
+        """
+        colours = colours or {"sim": "C0", "obs": "C3"}
+        t = self.spectra
+        lam = t["wavelength"].to_value(u.Mm)
+        for key in ("sim", "obs"):
+            ax.loglog(lam, t[key].value, color=colours[key], label=key)
+            ax.loglog(lam, t[key + "_matched"].value, color=colours[key], ls="--", lw=0.8,
+                      label=f"{key}, noise matched")
+        lo, hi = (b.to_value(u.Mm) for b in SPECTRUM_BAND)
+        ax.axvspan(lo, hi, color="0.92", zorder=0)
+        ax.invert_xaxis()
+        ax.set_xlabel("wavelength [Mm]", fontsize=8)
+        ax.set_ylabel("power [G² Mm²]", fontsize=8)
+        ax.tick_params(labelsize=7)
+        box = t.meta.get("box_pixels", ("?",))[0]
+        ax.set_title(f"power spectrum, central {box}² pixels (grey: 5-100 Mm)", fontsize=8)
+        ax.legend(fontsize=6)
+
+    def plot_rings(self, ax, colours=None):
+        """
+        Draw the mean |B| in centre-to-limb rings of both maps (dashed: noise matched).
+
+        Parameters
+        ----------
+        ax : `matplotlib.axes.Axes`
+        colours : dict, optional
+            ``{"sim": colour, "obs": colour}`` (default C0 and C3).
+        """
+        colours = colours or {"sim": "C0", "obs": "C3"}
+        t = self.rings
+        r = 0.5 * (np.asarray(t["r_inner"]) + np.asarray(t["r_outer"]))
+        for key in ("sim", "obs"):
+            ax.plot(r, t[key].to_value(u.G), "o-", color=colours[key], ms=3, label=key)
+            ax.plot(r, t[key + "_matched"].to_value(u.G), "--", color=colours[key], lw=0.8,
+                    label=f"{key}, noise matched")
+        ax.set_xlabel("ring distance from disk centre [R☉]", fontsize=8)
+        ax.set_ylabel("mean |B| [G]", fontsize=8)
+        ax.tick_params(labelsize=7)
+        ax.set_title("mean |B| by centre-to-limb ring", fontsize=8)
+        ax.legend(fontsize=6)
+
+
+def _measure(smap, rho, max_radius, box, ring_edges, edges=None):
+    data = map_values(smap)
+    with np.errstate(invalid="ignore"):
+        values = data[np.isfinite(data) & (rho < max_radius)]
+    noise = quiet_noise(smap)
+    tails = tail_percentiles(values)
+    return dict(
+        values=values,
+        numbers={"noise_box": noise.sigma.to_value(u.G), "noise_difference": noise.difference.to_value(u.G),
+                 "mean": float(np.mean(values)), "median": float(np.median(values)),
+                 "mean_abs": float(np.mean(np.abs(values))), "std": float(np.std(values)),
+                 "p99": float(tails[99.0]), "p999": float(tails[99.9])},
+        rings=rings_of_values(data, rho, ring_edges, u.G),
+        spectrum=power_spectrum(smap, box=box, edges=edges))
+
+
+def compare_statistics(sim_map, obs_map, *, seed=0, max_radius=0.98, box=640 * u.arcsec,
+                       ring_edges=RING_EDGES):
+    """
+    Measure two magnetograms the same way, as they are and with their noise matched.
+
+    Parameters
+    ----------
+    sim_map, obs_map : `~sunpy.map.GenericMap`
+        Magnetograms in G on comparable pixels (`gongsynth.compare` degrades
+        the finer one to GONG before calling this).
+    seed : int
+        Seed of the noise added by `match_noise`.
+    max_radius : float
+        Outer radius of the histogram region, solar radii.
+    box : `~astropy.units.Quantity`
+        Side of the central square of the power spectrum (640″).
+    ring_edges : sequence of float
+        Centre-to-limb rings of the mean |B| (solar radii).
+
+    Returns
+    -------
+    `StatisticsComparison`
+
+    Examples
+    --------
+    >>> import numpy as np, astropy.units as u, sunpy.map
+    >>> from astropy.coordinates import SkyCoord
+    >>> from sunpy.coordinates import frames
+    >>> ref = SkyCoord(0 * u.arcsec, 0 * u.arcsec, frame=frames.Helioprojective,
+    ...                observer="earth", obstime="2020-01-01")
+    >>> hdr = sunpy.map.make_fitswcs_header((300, 300), ref, scale=[2.5, 2.5] * u.arcsec / u.pix,
+    ...                                     unit=u.G)
+    >>> rng = np.random.default_rng(4)
+    >>> a, b = (sunpy.map.Map(rng.normal(0, s, (300, 300)), hdr) for s in (3, 6))
+    >>> stats = compare_statistics(a, b)
+    >>> round(float(stats.table["ks"][0]), 2), bool(stats.table["ks"][2] < 0.02)  # matched: one law
+    (0.16, True)
+    """
+    for name, m in (("sim_map", sim_map), ("obs_map", obs_map)):
+        check_map(m, name, finite=True)
+        if m.unit is None or not m.unit.is_equivalent(u.G):
+            raise ValueError(f"{name}: expected a magnetogram in gauss, got unit {m.unit}")
+    sim_map, obs_map = (m if m.unit == u.G
+                        else sunpy.map.Map(m.quantity.to_value(u.G), {**m.meta, "bunit": "G"})
+                        for m in (sim_map, obs_map))
+    sim_matched, obs_matched, added = match_noise(sim_map, obs_map, seed=seed)
+    # Matched maps share their originals' pixels: their distances from disk centre are measured once.
+    rho = [disk_coordinates(m)[0] for m in (sim_map, obs_map)]
+    first = _measure(sim_map, rho[0], max_radius, box, ring_edges)
+    edges = first["spectrum"].edges      # every spectrum on the sim's annuli: ratios of like with like
+    second = _measure(obs_map, rho[1], max_radius, box, ring_edges, edges)
+    # The map that got no noise is measured once.
+    measured = [first, second] + [_measure(m, r, max_radius, box, ring_edges, edges) if extra else same
+                                  for m, r, extra, same in ((sim_matched, rho[0], added[0], first),
+                                                            (obs_matched, rho[1], added[1], second))]
+    columns = {"map": list(_ROWS), "noise_added": [0.0, 0.0, added[0], added[1]]}
+    for key in measured[0]["numbers"]:
+        columns[key] = [m["numbers"][key] for m in measured]
+    ks, ks_centred = [], []
+    for a, b in ((measured[0], measured[1]), (measured[2], measured[3])):
+        va, vb = a["values"], b["values"]
+        d = float(scipy.stats.ks_2samp(va, vb).statistic)
+        dc = float(scipy.stats.ks_2samp(va - np.median(va), vb - np.median(vb)).statistic)
+        ks += [d, d]
+        ks_centred += [dc, dc]
+    table = QTable({k: (v * u.G if k not in ("map",) else v) for k, v in columns.items()})
+    table["ks"] = ks
+    table["ks_centred"] = ks_centred
+
+    names = ("sim", "obs", "sim_matched", "obs_matched")
+    r0 = measured[0]["rings"]
+    rings = QTable({"r_inner": r0["r_inner"], "r_outer": r0["r_outer"],
+                    "pixels_sim": r0["pixels"], "pixels_obs": measured[1]["rings"]["pixels"]})
+    for name, m in zip(names, measured):
+        rings[name] = m["rings"]["mean_abs"].to(u.G)
+    s0 = measured[0]["spectrum"]
+    spectra = QTable({"wavelength": s0.wavelength})
+    for name, m in zip(names, measured):
+        spectra[name] = m["spectrum"].power.to(u.G ** 2 * u.Mm ** 2)
+    for t in (rings, spectra):
+        with np.errstate(invalid="ignore", divide="ignore"):
+            t["ratio"] = np.asarray(t["sim"] / t["obs"])
+            t["ratio_matched"] = np.asarray(t["sim_matched"] / t["obs_matched"])
+    spectra.meta["box_pixels"] = (s0.box_pixels, measured[1]["spectrum"].box_pixels)
+    spectra.meta["pixel_size"] = (s0.pixel_size, measured[1]["spectrum"].pixel_size)
+    return StatisticsComparison(table=table, rings=rings, spectra=spectra)

@@ -1,0 +1,78 @@
+"""The statistics comparison: power spectra (analytic cases), tails, rings and noise matching."""
+import astropy.units as u
+import numpy as np
+import pytest
+import sunpy.map
+from astropy.coordinates import SkyCoord
+from sunpy.coordinates import frames
+
+from gongsynth.analysis.map_statistics import compare_statistics, match_noise
+from gongsynth.analysis.power_spectrum import km_per_arcsec, power_spectrum
+from gongsynth.analysis.statistics import pixel_difference_sigma, ring_means, tail_percentiles
+
+
+def _map(data, scale=2.5):
+    ref = SkyCoord(0 * u.arcsec, 0 * u.arcsec, frame=frames.Helioprojective, observer="earth",
+                   obstime="2020-06-01T12:00")
+    header = sunpy.map.make_fitswcs_header(data.shape, ref, scale=[scale, scale] * u.arcsec / u.pix, unit=u.G)
+    return sunpy.map.Map(data, header)
+
+
+def test_spectrum_of_a_plane_wave_peaks_at_its_wavelength_with_its_variance():
+    n = 256
+    m = _map(np.zeros((n, n)))
+    dx = (2.5 * u.arcsec * km_per_arcsec(m)).to_value(u.Mm)
+    wavelength = n * dx / 12        # 12 whole periods across the box: ~39 Mm
+    x = np.arange(n) * dx
+    wave = _map(10 * np.cos(2 * np.pi * x / wavelength)[None, :] * np.ones((n, 1)))
+    spectrum = power_spectrum(wave)
+    k = spectrum.edges.to_value(1 / u.Mm)
+    peak = int(np.nanargmax(spectrum.power.value))
+    assert k[peak] <= 1 / wavelength < k[peak + 1]
+    # Parseval with the window taken out: a cosine of amplitude A has variance A²/2.
+    assert spectrum.variance.to_value(u.G ** 2) == pytest.approx(50, rel=0.02)
+
+
+def test_spectrum_of_white_noise_is_flat_at_sigma_squared_dx_squared():
+    n = 256
+    noise = _map(np.random.default_rng(7).normal(0, 3, (n, n)))
+    spectrum = power_spectrum(noise)
+    dx = spectrum.pixel_size.to_value(u.Mm)
+    many = spectrum.modes >= 200      # annuli of >= 200 modes: the mean of exponential variates to ~10 %
+    level = spectrum.power.value[many] / (9 * dx ** 2)
+    assert np.all(np.abs(level - 1) < 0.3)
+    assert np.average(level, weights=spectrum.modes[many]) == pytest.approx(1, abs=0.05)
+    with pytest.raises(ValueError, match="box"):
+        power_spectrum(noise, box=-1 * u.arcsec)
+
+
+def test_tails_and_rings():
+    x = np.random.default_rng(3).normal(5, 2, 400_000)
+    tails = tail_percentiles(x)
+    assert tails[99.0] == pytest.approx(2 * 2.5758, rel=0.02)
+    assert tails[99.9] == pytest.approx(2 * 3.2905, rel=0.03)
+    data = np.full((128, 128), 4.0)
+    m = _map(data, scale=16)
+    rings = ring_means(m, (0, 0.5, 0.9))
+    assert np.allclose(rings["mean_abs"].to_value(u.G), 4.0) and np.all(rings["pixels"] > 0)
+
+
+def test_matching_the_noise_equalises_pixel_difference_noise_and_ks():
+    rng = np.random.default_rng(11)
+    a, b = _map(rng.normal(0, 2, (400, 400))), _map(rng.normal(0, 5, (400, 400)))
+    a2, b2, added = match_noise(a, b, seed=1)
+    assert added[1] == 0 and b2 is b
+    # Matched on the quietest boxes, each known to ~1.2 % (noise_estimate): 5 % is three sigma of both.
+    assert pixel_difference_sigma(a2.data) == pytest.approx(pixel_difference_sigma(b.data), rel=0.05)
+    stats = compare_statistics(a, b)
+    t = stats.table
+    assert list(t["map"]) == ["sim", "obs", "sim, noise matched", "obs, noise matched"]
+    assert t["ks"][0] > 0.2 and t["ks"][2] < 0.02     # different laws, then the same (n ~ 1e5: KS ~ 0.005)
+    assert t["mean_abs"][2].to_value(u.G) == pytest.approx(5 * np.sqrt(2 / np.pi), rel=0.05)
+    low, high = stats.spectrum_ratio_range(matched=True)
+    assert 0.7 < low <= high < 1.4
+    assert "power ratio 5-100 Mm" in stats.summary()
+    from matplotlib.figure import Figure
+    ax = Figure().add_subplot()
+    stats.plot_spectra(ax)
+    assert len(ax.get_lines()) == 4 and "power spectrum" in ax.get_title()
