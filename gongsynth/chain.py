@@ -376,7 +376,7 @@ def line_of(instrument):
 
 def _network(config):
     """The full disk's supergranular network (stream ``"network"`` of the run's seed), or None."""
-    if not config.network:
+    if not config.network_on:
         return None
     from gongsynth.sun.surface_field.network import SupergranularNetwork
     return SupergranularNetwork(seed=child_sequence(config.seed, "network"))

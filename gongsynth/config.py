@@ -78,7 +78,8 @@ _DOCS = {
     "site": f"the observer's ground site, a GONG site {sorted(GONG_SITES)}; unset: the Earth's centre",
     "like": "a real GONG full-disk FITS file whose date, site, plate scale and pointing the run takes",
     "network": "full-disk mode: lay the magnetic network on supergranular cells over the large-scale field "
-               "(true; false: the field as it is)",
+               "(true; false: the field as it is; unset: on for the synthetic and quiet Suns, off over an "
+               "observed map, which holds the Sun's own network)",
 }
 
 
@@ -322,10 +323,12 @@ class SimulationConfig:
     like : str or None
         A real GONG file whose date, site, plate scale and pointing the run
         took (see `gongsynth.observing.like_gong`; keys given explicitly win).
-    network : bool
+    network : bool or None
         Full-disk mode: lay the magnetic network on supergranular cells
-        (`gongsynth.sun.surface_field.network`) over the large-scale field
-        (default True); no effect in tiled mode.
+        (`gongsynth.sun.surface_field.network`) over the large-scale field.
+        Default (None): on for the ``"synthetic"`` and ``"quiet"`` surface
+        fields, off over an observed map (it holds the Sun's own network;
+        see `network_on`); no effect in tiled mode.
     pointing : tuple of `~astropy.units.Quantity`
         Full-disk mode: helioprojective (Tx, Ty) of the detector's centre
         (default (0, 0): the Sun's centre on the detector's centre; a real
@@ -370,11 +373,11 @@ class SimulationConfig:
     like: str | None = None
     pointing: tuple = (0 * u.arcsec, 0 * u.arcsec)
     instrument: object = field(default_factory=instruments.get)
-    network: bool = True
+    network: bool | None = None
 
     def __post_init__(self):
-        if not isinstance(self.network, bool):
-            raise ValueError(f"network must be true or false, got {self.network!r}")
+        if self.network is not None and not isinstance(self.network, bool):
+            raise ValueError(f"network must be true, false or unset (None), got {self.network!r}")
         if self.sun is None and self.mode in MODES:
             object.__setattr__(self, "sun", default_sun(self.mode))
         if self.sun not in SUNS:
@@ -471,6 +474,14 @@ class SimulationConfig:
     def detector_pixels(self):
         """Detector side in pixels (the instrument's if ``detector_shape`` is None)."""
         return self.instrument.detector_shape if self.detector_shape is None else self.detector_shape
+
+    @property
+    def network_on(self):
+        """Whether a full-disk run lays the supergranular network: ``network``, or by default
+        on unless the surface field is an observed map (bool)."""
+        if self.network is not None:
+            return self.network
+        return self.surface_field is None or self.surface_field in SURFACE_FIELD_NAMES
 
     def replace(self, **changes):
         """

@@ -68,3 +68,16 @@ def test_bad_parameters():
         SupergranularNetwork(coherence=2)
     with pytest.raises(ValueError, match="large_scale"):
         SupergranularNetwork().on_grid(LON, LAT, np.zeros((3, 3)))
+
+
+def test_the_network_is_laid_on_the_synthetic_and_quiet_suns_not_over_an_observed_map():
+    from gongsynth.config import IN_MEMORY, SimulationConfig
+
+    assert SimulationConfig(mode="full-disk").network_on
+    assert SimulationConfig(mode="full-disk", surface_field="quiet").network_on
+    for observed in ("mdi.fits", IN_MEMORY):          # an observed map holds the Sun's own network
+        assert not SimulationConfig(mode="full-disk", surface_field=observed).network_on
+        assert SimulationConfig(mode="full-disk", surface_field=observed, network=True).network_on
+    assert not SimulationConfig(mode="full-disk", network=False).network_on
+    config = SimulationConfig(mode="full-disk", seed=1)
+    assert SimulationConfig.from_toml(config.to_toml()) == config
