@@ -119,3 +119,21 @@ def test_unmagnetised_atmosphere_takes_the_scalar_solve():
     i = cube.I.value[0, 0]
     assert np.abs(weak.I.value[0, 0] - i).max() < 1e-6 * i[0]
     assert kernels.TAU_BOTTOM == 60.0 and kernels.TAU_TOP == 1e-6          # integration range unchanged
+
+
+def test_fast_electron_density_equals_the_reference_solve():
+    """Closed-form Saha factors and a tabulated Newton start: the same equation and stopping rule
+    (|d ln n_e| < 1e-11), so the same n_e within a few 1e-11 over the whole range the kernels see
+    (800 K to 3e5 K, both input kinds), the partition-function nodes and caps included."""
+    from gongsynth.sun.rt.atomic_data import PF_TEMPERATURE
+    from gongsynth.sun.rt.eos import electron_density
+
+    rng = np.random.default_rng(5)
+    t = np.concatenate([np.exp(rng.uniform(np.log(800), np.log(3e5), 4000)), PF_TEMPERATURE,
+                        PF_TEMPERATURE * (1 + 1e-9), [3000.0 - 1e-7, 8000.0 + 1e-7]])
+    p = np.exp(rng.uniform(np.log(1e-2), np.log(1e8), t.size))
+    nh = np.exp(rng.uniform(np.log(1e8), np.log(1e19), t.size))
+    for kw in ({"gas_pressure": p}, {"hydrogen_density": nh}):
+        fast = electron_density(t, **kw)
+        ref = electron_density(t, reference=True, **kw)
+        assert np.abs(fast / ref - 1).max() < 5e-11
