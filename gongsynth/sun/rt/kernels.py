@@ -22,12 +22,14 @@ elimination needs no pivoting).  The ray starts at the deepest point where
 τ_c ≤ `TAU_BOTTOM` with the diffusion approximation and ignores the top layers
 above τ ≤ `TAU_TOP` at every wavelength.
 
-`solve_columns` is the fast implementation: per ray it advances all
-wavelengths together point by point in loops the compiler vectorises, takes
-w(z) from `faddeeva_fast` (a Taylor table where Humlíček's W4 is slow, more
-accurate than W4 there), the σ profiles from the Taylor series in the Zeeman
-shift when it is below `VB_TAYLOR` Doppler widths, and the scalar solve on rays
-with B = 0.  `solve_columns_reference` is the first, simple implementation of
+`solve_columns` is the fast implementation: per ray (`_solve_ray`) it
+advances all wavelengths together point by point in loops the compiler
+vectorises, takes w(z) in W4's regions as contiguous runs of wavelengths
+(`_w_vec`: a Taylor table where Humlíček's W4 is slow, more accurate than W4
+there), the σ profiles from the Taylor series in the Zeeman shift when it is
+below `VB_TAYLOR` Doppler widths, and the scalar solve on rays with B = 0; its
+only fast-math flag is fused multiply-add, so it gives the same bits for any
+block size and thread count.  `solve_columns_reference` is the first, simple implementation of
 the same equations, kept to test and benchmark the fast one against.
 """
 from __future__ import annotations
