@@ -10,7 +10,17 @@ the continuum), and Lightweaver's LTE formal solution of one FAL-C column
 columns per second.  ``--large N`` also times an N² × 100-height box (FAL-C
 with 2 % temperature noise, B = 0) and extrapolates to 1024²; peak RSS.
 
-Run:  python benchmarks/bench_rt.py [--large 256]
+``--voxels N`` (issue 26): the default run's 3-D Sun (`model_atmosphere`, N²
+columns × 80 heights, the run's 384 km columns scaled to N) through the whole
+`synthesize` for both lines of `gongsynth.rt.LINES`, with its field and with
+B = 0: ns per column·height·wavelength per core (process CPU time, the
+minimum of ``--repeat`` runs: the figure that holds on a shared machine),
+each stage's share, the ratio to a plain baseline timed in the same process
+(one Humlíček W4 evaluation per voxel-wavelength, `~gongsynth.sun.rt.voigt.faddeeva`)
+and the hardware limit estimated from this core's measured FMA throughput and
+the fast solver's operation count (`FLOPS_PER_VW`).
+
+Run:  python benchmarks/bench_rt.py [--large 256] [--voxels 128 [--repeat 3] [--only-voxels]]
 """
 import argparse
 import contextlib
@@ -25,6 +35,14 @@ import numpy as np
 import gongsynth
 from gongsynth.sun.rt import synthesis
 from gongsynth.sun.rt.kernels import solve_columns_reference
+from gongsynth.sun.rt.voigt import faddeeva
+
+#: Floating-point operations per voxel-wavelength of the fast solver with a weak field (the default run's
+#: common case), counted from `gongsynth.sun.rt.kernels._solve_ray`: x (2), w(z) (Taylor table 28 /
+#: W4 region 2 ~30 / region 1 ~14; ~24 on the default grid), σ by the Taylor recurrence (~70), the
+#: absorption-matrix elements (~20), Δτ and e^-Δτ (~22), the DELO weights (~10), the right-hand side (~40)
+#: and the 4 × 4 elimination (~45); 6 divisions, counted as 4 operations each.
+FLOPS_PER_VW = 257
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 
@@ -52,11 +70,133 @@ def reference_solver():
         synthesis.solve_columns = fast
 
 
+@numba.njit(parallel=True, cache=True)
+def _baseline(x, y, out):
+    """The plain baseline: one W4 evaluation per element."""
+    for p in numba.prange(x.size):
+        out[p] = faddeeva(x[p], y)[0]
+
+
+@numba.njit(cache=True, fastmath={"contract"})
+def _fma_rate(x, reps):
+    """Eight independent multiply-add chains per element (the compiler vectorises across elements)."""
+    acc = np.zeros_like(x)
+    for _ in range(reps):
+        for j in range(x.size):
+            a = x[j]
+            b = a + 1.0
+            c = a + 2.0
+            d = a + 3.0
+            e = a + 4.0
+            f = a + 5.0
+            g = a + 6.0
+            h = a + 7.0
+            for _ in range(16):
+                a = a * 0.999 + 0.001
+                b = b * 0.999 + 0.001
+                c = c * 0.999 + 0.001
+                d = d * 0.999 + 0.001
+                e = e * 0.999 + 0.001
+                f = f * 0.999 + 0.001
+                g = g * 0.999 + 0.001
+                h = h * 0.999 + 0.001
+            acc[j] += a + b + c + d + e + f + g + h
+    return acc
+
+
+def cpu_timed(fn, *args, repeat=3, **kwargs):
+    """Minimum process CPU time (s) and wall time of that run over ``repeat`` calls (after one warm-up)."""
+    fn(*args, **kwargs)
+    best = (np.inf, np.inf)
+    for _ in range(repeat):
+        t0, w0 = time.process_time(), time.perf_counter()
+        fn(*args, **kwargs)
+        best = min(best, (time.process_time() - t0, time.perf_counter() - w0))
+    return best
+
+
+def peak_flops_per_ns():
+    """Measured multiply-add throughput of one core (flop per ns, float64; the hardware limit's yardstick)."""
+    x = np.linspace(0.0, 1.0, 256)
+    reps = 2000
+    cpu, _ = cpu_timed(_fma_rate, x, reps)
+    return x.size * reps * 16 * 8 * 2 / (cpu * 1e9)
+
+
+class StageClock:
+    """CPU seconds spent in each of `synthesize`'s stage functions (patched in `synthesis` while active)."""
+
+    NAMES = ("_state", "column_opacity", "solve_columns", "sample_component", "los_field_at_depth",
+             "reference_height")
+
+    def __init__(self):
+        self.seconds = {}
+
+    def __enter__(self):
+        self.saved = {name: getattr(synthesis, name) for name in self.NAMES}
+        for name, fn in self.saved.items():
+            def timed_stage(*args, _fn=fn, _name=name, **kwargs):
+                t0 = time.process_time()
+                try:
+                    return _fn(*args, **kwargs)
+                finally:
+                    self.seconds[_name] = self.seconds.get(_name, 0.0) + time.process_time() - t0
+            setattr(synthesis, name, timed_stage)
+        return self
+
+    def __exit__(self, *exc):
+        for name, fn in self.saved.items():
+            setattr(synthesis, name, fn)
+
+
+def voxel_benchmark(n, repeat):
+    """ns per column·height·wavelength per core of the default 3-D Sun, both lines, with and without field."""
+    from gongsynth.sun.model_atmosphere import model_atmosphere
+
+    atm = model_atmosphere((n, n), 384 * u.km * 256 / n, seed=1)
+    nz = atm.shape[0]
+    calm = atm.replace(magnetic_field=np.zeros((3,) + atm.shape, np.float32) * u.G)
+    peak = peak_flops_per_ns()
+    rng = np.random.default_rng(0)
+    xs = rng.uniform(-20, 20, n * n * nz * 51)
+    base_cpu, _ = cpu_timed(_baseline, xs, 0.05, np.empty_like(xs), repeat=repeat)
+    nvw = xs.size
+    print(f"3-D Sun {n}^2 columns x {nz} heights x 51 wavelengths, mu = 0.8, {numba.get_num_threads()} "
+          f"threads; baseline (one W4 per voxel-wavelength) {base_cpu / nvw * 1e9:.2f} ns/vw/core; "
+          f"measured FMA rate {peak:.1f} flop/ns/core -> hardware limit ~{FLOPS_PER_VW / peak:.1f} "
+          f"ns/vw/core for the solver's {FLOPS_PER_VW} operations")
+    for line in gongsynth.rt.LINES:
+        for label, box in (("field", atm), ("B = 0", calm)):
+            best = None
+            gongsynth.rt.synthesize(box, mu=0.8, progress=False, line=line)
+            for _ in range(repeat):
+                with StageClock() as clock:
+                    t0, w0 = time.process_time(), time.perf_counter()
+                    gongsynth.rt.synthesize(box, mu=0.8, progress=False, line=line)
+                    cpu, wall = time.process_time() - t0, time.perf_counter() - w0
+                if best is None or cpu < best[0]:
+                    best = (cpu, wall, dict(clock.seconds))
+            cpu, wall, stages = best
+            share = ", ".join(f"{k.strip('_')} {v / nvw * 1e9:.1f}" for k, v in stages.items())
+            print(f"  {line:11s} {label:6s}: {cpu / nvw * 1e9:6.1f} ns/vw/core (CPU; wall {wall:.2f} s), "
+                  f"{cpu / base_cpu:5.2f} x baseline; stages ns/vw: {share}")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
     parser.add_argument("--large", type=int, default=0, help="also time an N x N FAL-C box with 100 heights")
+    parser.add_argument("--voxels", type=int, default=0,
+                        help="also time the default 3-D Sun on N x N columns, both lines, with and without "
+                             "field")
+    parser.add_argument("--repeat", type=int, default=3,
+                        help="runs per --voxels figure (the minimum is kept)")
+    parser.add_argument("--only-voxels", action="store_true", help="skip the other measurements")
     args = parser.parse_args()
     print(f"numba threads: {numba.get_num_threads()}")
+    if args.voxels:
+        voxel_benchmark(args.voxels, args.repeat)
+        if args.only_voxels:
+            return
     falc = gongsynth.Atmosphere.from_1d(DATA / "real/models/FALC_82.atmos")
     gongsynth.rt.synthesize(falc, progress=False)                      # compile
     with reference_solver():

@@ -119,3 +119,73 @@ def test_unmagnetised_atmosphere_takes_the_scalar_solve():
     i = cube.I.value[0, 0]
     assert np.abs(weak.I.value[0, 0] - i).max() < 1e-6 * i[0]
     assert kernels.TAU_BOTTOM == 60.0 and kernels.TAU_TOP == 1e-6          # integration range unchanged
+
+
+def test_fast_electron_density_equals_the_reference_solve():
+    """Closed-form Saha factors and a tabulated Newton start: the same equation and stopping rule
+    (|d ln n_e| < 1e-11), so the same n_e within a few 1e-11 over the whole range the kernels see
+    (800 K to 3e5 K, both input kinds), the partition-function nodes and caps included."""
+    from gongsynth.sun.rt.atomic_data import PF_TEMPERATURE
+    from gongsynth.sun.rt.eos import electron_density
+
+    rng = np.random.default_rng(5)
+    t = np.concatenate([np.exp(rng.uniform(np.log(800), np.log(3e5), 4000)), PF_TEMPERATURE,
+                        PF_TEMPERATURE * (1 + 1e-9), [3000.0 - 1e-7, 8000.0 + 1e-7]])
+    p = np.exp(rng.uniform(np.log(1e-2), np.log(1e8), t.size))
+    nh = np.exp(rng.uniform(np.log(1e8), np.log(1e19), t.size))
+    for kw in ({"gas_pressure": p}, {"hydrogen_density": nh}):
+        fast = electron_density(t, **kw)
+        ref = electron_density(t, reference=True, **kw)
+        assert np.abs(fast / ref - 1).max() < 5e-11
+
+
+def test_large_damping_takes_the_scalar_faddeeva_in_the_fast_solver():
+    """a > TABLE_YMAX (W4's region 3 by `faddeeva_fast` per wavelength), with and without a strong field."""
+    for field in (0.0, 2000.0):
+        args = list(_column(field))
+        args[8] = 3.0 * np.ones_like(args[8])                               # damping a = 3
+        res = {}
+        for name, fn in (("fast", solve_columns), ("ref", solve_columns_reference)):
+            out = [np.empty((1, 51), np.float32) for _ in range(4)]
+            fn(*args, *out, *(np.empty((1, 200), np.float32) for _ in range(2)))
+            res[name] = out
+        ic = res["ref"][0][0, 0]
+        for got, want in zip(res["fast"], res["ref"]):
+            assert np.abs(got - want).max() < 1e-4 * ic
+
+
+def test_fast_solver_refuses_a_decreasing_wavelength_grid():
+    args = list(_column(100.0))
+    args[0] = args[0][::-1].copy()
+    out = [np.empty((1, 51), np.float32) for _ in range(4)]
+    out += [np.empty((1, 200), np.float32) for _ in range(2)]
+    with pytest.raises(ValueError, match="increasing"):
+        solve_columns(*args, *out)
+
+
+def test_3d_sun_fast_path_matches_the_reference_and_any_thread_count(monkeypatch):
+    """The default run's kind of input (T and P only: the equation of state runs; granulation, network
+    elements, a weak internetwork field): the fast electron density and solver against the reference ones
+    within 1e-4 Ic, and the same bits with one thread as with all."""
+    from gongsynth.sun.model_atmosphere import model_atmosphere
+    from gongsynth.sun.rt import eos
+
+    atm = model_atmosphere((16, 16), 384 * u.km, seed=3, nz=40)
+    assert atm.raw("electron_density") is None
+    fast = synthesize(atm, mu=0.7, azimuth=-90 * u.deg, progress=False, line="Fe I 617.3")
+    threads = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        one = synthesize(atm, mu=0.7, azimuth=-90 * u.deg, progress=False, line="Fe I 617.3")
+    finally:
+        numba.set_num_threads(threads)
+    for s in "IQUV":
+        np.testing.assert_array_equal(getattr(fast, s).value, getattr(one, s).value)
+    electron_density = eos.electron_density
+    monkeypatch.setattr(eos, "electron_density", lambda *a, **k: electron_density(*a, reference=True, **k))
+    monkeypatch.setattr(synthesis, "solve_columns", solve_columns_reference)
+    ref = synthesize(atm, mu=0.7, azimuth=-90 * u.deg, progress=False, line="Fe I 617.3")
+    ic = ref.I.value[:, :, :1].min()
+    assert np.abs(ref.V.value).max() > 1e-3 * ic                          # a field to compare
+    for s in "IQUV":
+        assert np.abs(getattr(fast, s).value - getattr(ref, s).value).max() < 1e-4 * ic

@@ -134,7 +134,137 @@ def _solve_ne(phi, abund, nh_or_ntot, from_pressure, sum_a, out):
         out[p] = math.exp(x)
 
 
-def electron_density(temperature, *, hydrogen_density=None, gas_pressure=None):
+def _saha_coefficients():
+    """
+    Coefficients of ln Φ_m = a + b ln T − c/T per element and `PF_TEMPERATURE` interval (`saha_phi`).
+
+    `saha_phi` interpolates log U linearly in ln T between the table's nodes (held at the caps and
+    above 20 000 K), so on each interval ln Φ is exactly that; the nodes are all multiples of 500 K, so
+    the interval of T is ``_PHI_BIN[int(T / 500)]``.  Returns (a, b) of shape (intervals, elements),
+    c of shape (elements,) and the bin table.
+    """
+    nodes = PF_TEMPERATURE[PF_TEMPERATURE <= 20000.0]
+    ln_nodes = np.log(nodes)
+    a = np.empty((nodes.size, len(ELEMENTS)))
+    b = np.empty((nodes.size, len(ELEMENTS)))
+    for m, el in enumerate(ELEMENTS):
+        v = (_log_u(el + "II", ln_nodes) - _log_u(el + "I", ln_nodes)) * math.log(10.0)
+        slope = np.diff(v) / np.diff(ln_nodes)
+        b[:-1, m] = slope + 1.5
+        a[:-1, m] = v[:-1] - slope * ln_nodes[:-1] + math.log(_SAHA)
+        b[-1, m] = 1.5                                  # above 20 000 K: U held constant
+        a[-1, m] = v[-1] + math.log(_SAHA)
+    c = np.array([IONISATION_EV[el] * _EV_K for el in ELEMENTS])
+    bins = np.searchsorted(nodes, 500.0 * np.arange(int(nodes[-1] // 500) + 1), side="right") - 1
+    return a, b, c, bins.astype(np.int64)
+
+
+_PHI_A, _PHI_B, _PHI_C, _PHI_BIN = _saha_coefficients()
+
+
+@nb.njit(cache=True, inline="always")
+def _saha_point(t, abund, phi_a, phi_b, phi_c, phi_bin, phi):
+    """`saha_phi` of every element at one temperature into ``phi`` (the closed form per interval)."""
+    t = max(t, 1000.0)
+    k = int(min(t, 20000.0) * (1.0 / 500.0))
+    i = phi_bin[min(k, phi_bin.size - 1)]
+    lt = math.log(t)
+    it = 1.0 / t
+    for m in range(abund.size):
+        phi[m] = math.exp(phi_a[i, m] + phi_b[i, m] * lt - phi_c[m] * it)
+
+
+@nb.njit(cache=True, inline="always")
+def _newton_ne(phi, abund, q, from_pressure, sum_a, x):
+    """
+    `_solve_ne`'s safeguarded Newton in ln n_e at one point, from the start ``x``; returns n_e.
+
+    The bracket is kept in ln n_e (the current point exactly, not log(exp(x))) and a step below the
+    tolerance ends the iteration before the bracket test: near the root rounding could otherwise
+    put the last step just outside the bracket and restart by bisection from 10⁻³⁰ of the density.
+    """
+    lhi = math.log(q if from_pressure else q * sum_a)
+    llo = lhi - 69.07755278982137                      # ln 1e-30
+    if not (llo < x < lhi):
+        x = lhi - 6.907755278982137                    # ln 1e-3: the reference start
+    for _ in range(200):
+        ne = math.exp(x)
+        nh = (q - ne) / sum_a if from_pressure else q
+        s = 0.0
+        ds = 0.0
+        for m in range(abund.size):
+            r = 1.0 / (ne + phi[m])
+            f = abund[m] * phi[m] * r
+            s += f
+            ds += f * r
+        f = ne - nh * s
+        if f > 0.0:
+            lhi = min(lhi, x)
+        else:
+            llo = max(llo, x)
+        fp = 1.0 + nh * ds + (s / sum_a if from_pressure else 0.0)
+        xn = x - f / (fp * ne)
+        if abs(xn - x) < 1e-11:
+            return math.exp(xn)
+        if not (llo < xn < lhi):
+            xn = 0.5 * (llo + lhi)
+        x = xn
+    return math.exp(x)
+
+
+#: The start table of the fast solver: ln n_e on a (ln T, ln q) grid (q = P/kT or n_H), per input kind.
+_GUESS_LNT = (math.log(1000.0), math.log(1e5), 240)
+_GUESS_LNQ = (math.log(1e2), math.log(1e24), 120)
+
+
+@nb.njit(parallel=True, cache=True)
+def _solve_ne_fast(t, q, from_pressure, sum_a, abund, phi_a, phi_b, phi_c, phi_bin, guess, out):
+    """
+    n_e at every point: `saha_phi` in closed form, Newton from a bilinear start in ``guess``.
+
+    The same equation and stopping rule as `_solve_ne` (|Δ ln n_e| < 1e-11), so the same n_e to
+    ~1e-11; each point depends on its own data only.  ``guess`` empty: the reference start.
+    """
+    t0, t1, nt = _GUESS_LNT
+    q0, q1, nq = _GUESS_LNQ
+    nchunk = (t.size + 1023) // 1024
+    for c in nb.prange(nchunk):
+        phi = np.empty(abund.size)
+        for p in range(c * 1024, min(t.size, c * 1024 + 1024)):
+            _saha_point(t[p], abund, phi_a, phi_b, phi_c, phi_bin, phi)
+            x = 0.0
+            if guess.size:
+                ft = min(max((math.log(t[p]) - t0) / (t1 - t0) * (nt - 1), 0.0), nt - 1.000001)
+                fq = min(max((math.log(q[p]) - q0) / (q1 - q0) * (nq - 1), 0.0), nq - 1.000001)
+                it = int(ft)
+                iq = int(fq)
+                wt = ft - it
+                wq = fq - iq
+                x = ((1.0 - wt) * ((1.0 - wq) * guess[it, iq] + wq * guess[it, iq + 1])
+                     + wt * ((1.0 - wq) * guess[it + 1, iq] + wq * guess[it + 1, iq + 1]))
+            out[p] = _newton_ne(phi, abund, q[p], from_pressure, sum_a, x)
+
+
+_GUESS = {}
+
+
+def _guess_table(from_pressure):
+    """The start grid's ln n_e (built once per process by the fast solver from the reference start)."""
+    if from_pressure not in _GUESS:
+        lt = np.linspace(*_GUESS_LNT)
+        lq = np.linspace(*_GUESS_LNQ)
+        t, q = (np.ascontiguousarray(a.ravel()) for a in np.meshgrid(np.exp(lt), np.exp(lq), indexing="ij"))
+        out = np.empty(t.size)
+        _solve_ne_fast(t, q, from_pressure, PARTICLES_PER_H, _ABUND, _PHI_A, _PHI_B, _PHI_C, _PHI_BIN,
+                       np.empty((0, 0)), out)
+        _GUESS[from_pressure] = np.log(out).reshape(lt.size, lq.size)
+    return _GUESS[from_pressure]
+
+
+_ABUND = np.array([ABUNDANCE[e] for e in ELEMENTS])
+
+
+def electron_density(temperature, *, hydrogen_density=None, gas_pressure=None, reference=False):
     """
     LTE electron density from T and either the hydrogen density or the gas pressure.
 
@@ -146,6 +276,11 @@ def electron_density(temperature, *, hydrogen_density=None, gas_pressure=None):
         Total hydrogen nuclei per cm³.
     gas_pressure : array_like, optional
         dyn cm⁻² (give exactly one of the two).
+    reference : bool, optional
+        Solve as the first implementation did (Φ of each element by `saha_phi` on whole arrays, Newton
+        from n_e = 10⁻³ of the particle density), kept to test the default against.  The default
+        evaluates Φ in closed form per point and starts Newton from a tabulated n_e(T, q): the same
+        equation and stopping rule, so the same n_e within ~1e-11, ~20× faster.
 
     Returns
     -------
@@ -169,8 +304,12 @@ def electron_density(temperature, *, hydrogen_density=None, gas_pressure=None):
     t, q = t.reshape(-1), q.reshape(-1)
     if not (np.isfinite(t).all() and np.isfinite(q).all() and (t > 0).all() and (q > 0).all()):
         raise ValueError("temperature and density/pressure must be finite and positive")
-    abund = np.array([ABUNDANCE[e] for e in ELEMENTS])
     out = np.empty(t.size)
+    if not reference:
+        _solve_ne_fast(np.ascontiguousarray(t), np.ascontiguousarray(q), from_pressure, PARTICLES_PER_H,
+                       _ABUND, _PHI_A, _PHI_B, _PHI_C, _PHI_BIN, _guess_table(from_pressure), out)
+        return out.reshape(shape)
+    abund = _ABUND
     for start in range(0, t.size, _CHUNK):
         sl = slice(start, start + _CHUNK)
         phi = np.stack([saha_phi(e, t[sl]) for e in ELEMENTS])

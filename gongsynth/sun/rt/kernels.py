@@ -22,12 +22,14 @@ elimination needs no pivoting).  The ray starts at the deepest point where
 τ_c ≤ `TAU_BOTTOM` with the diffusion approximation and ignores the top layers
 above τ ≤ `TAU_TOP` at every wavelength.
 
-`solve_columns` is the fast implementation: per ray it advances all
-wavelengths together point by point in loops the compiler vectorises, takes
-w(z) from `faddeeva_fast` (a Taylor table where Humlíček's W4 is slow, more
-accurate than W4 there), the σ profiles from the Taylor series in the Zeeman
-shift when it is below `VB_TAYLOR` Doppler widths, and the scalar solve on rays
-with B = 0.  `solve_columns_reference` is the first, simple implementation of
+`solve_columns` is the fast implementation: per ray (`_solve_ray`) it
+advances all wavelengths together point by point in loops the compiler
+vectorises, takes w(z) in W4's regions as contiguous runs of wavelengths
+(`_w_vec`: a Taylor table where Humlíček's W4 is slow, more accurate than W4
+there), the σ profiles from the Taylor series in the Zeeman shift when it is
+below `VB_TAYLOR` Doppler widths, and the scalar solve on rays with B = 0; its
+only fast-math flag is fused multiply-add, so it gives the same bits for any
+block size and thread count.  `solve_columns_reference` is the first, simple implementation of
 the same equations, kept to test and benchmark the fast one against.
 """
 from __future__ import annotations
@@ -37,7 +39,15 @@ import math
 import numba as nb
 import numpy as np
 
-from gongsynth.sun.rt.voigt import TABLE_YMAX, faddeeva, faddeeva_fast, sigma_taylor, w_rational, w_table
+from gongsynth.sun.rt.voigt import (
+    TABLE_YMAX,
+    faddeeva,
+    faddeeva_fast,
+    sigma_taylor,
+    w_region1,
+    w_region2,
+    w_table,
+)
 
 __all__ = ["faddeeva", "faddeeva_fast", "solve_columns", "solve_columns_reference", "TAU_BOTTOM", "TAU_TOP",
            "VB_TAYLOR", "ZEEMAN_CM_PER_G"]
@@ -51,6 +61,9 @@ VB_TAYLOR = 0.1
 #: e / (4π m_e c²), cm⁻¹ G⁻¹: Δλ_B = this × λ² g B.
 ZEEMAN_CM_PER_G = 4.66864e-5
 _C = 2.99792458e10
+#: Fast-math flags of the fast solver: only fused multiply-add (no reassociation, NaN and inf kept), so the
+#: result is the same for any block size and thread count.
+_CONTRACT = {"contract"}
 
 
 @nb.njit(cache=True, inline="always")
@@ -275,39 +288,54 @@ def _fast_elements(v, a, vb, kc, h, c1, c2, cq, cu, cv):
     return ei, t * cq, t * cu, g * (hr - hb) * cv, r * cq, r * cu, g * (fr - fb) * cv
 
 
-@nb.njit(cache=True, error_model="numpy")
-def _eta_i_vec(dl, rd, vs, y, kc, h, eu, dt, dsk):
-    """B = 0: η_I of all wavelengths at one point (y ≤ 2) into ``eu`` and the steps' Δτ into ``dt``."""
-    for j in range(dl.size):
-        x = dl[j] * rd - vs
-        wr, wi = w_table(x, y)
-        rr, ri = w_rational(x, y)
-        hp = wr if abs(x) + y < 5.5 else rr
-        ei = kc + h * (hp * 0.0 + hp * 2.0)
-        dt[j] = 0.5 * (eu[j] + ei) * dsk
-        eu[j] = ei
-
-
-@nb.njit(cache=True, error_model="numpy")
-def _profiles_vec(dl, rd, vs, y, vb, hp, fp, hs, fs, hd, fd):
+@nb.njit(cache=True, error_model="numpy", fastmath=_CONTRACT)
+def _w_vec(dl, rd, shift, y, xs, wr, wi):
     """
-    π and σ profiles of all wavelengths at one point with y ≤ 2, vb ≤ `VB_TAYLOR` (a vectorised loop).
+    w(x + i y) of all wavelengths at one point, x = dl·rd − shift (increasing with the index).
 
-    w(z) from the table where |x| + y < 5.5, else from W4's rational regions; the σ
-    components from it by `~gongsynth.sun.rt.voigt.sigma_taylor` (in the wings too: the
-    recurrence's error there stays below W4's own, < 4e-5 of the peak for vb ≤ 0.15).
+    W4's regions are contiguous runs of wavelengths, so each is a loop of its own that the compiler
+    vectorises: the Taylor table where |x| + y < 5.5 (y ≤ `TABLE_YMAX`), W4's region 2 up to
+    |x| + y < 15, region 1 beyond; with y > `TABLE_YMAX` (rare) `faddeeva_fast` per wavelength.
     """
-    for j in range(dl.size):
-        x = dl[j] * rd - vs
-        ax = abs(x)
-        wr, wi = w_table(x, y)
-        rr, ri = w_rational(x, y)
-        core = ax + y < 5.5
-        hr = wr if core else rr
-        fr = wi if core else ri
-        hp[j] = hr
-        fp[j] = fr
-        hs[j], fs[j], hd[j], fd[j] = sigma_taylor(x, y, vb, hr, fr)
+    nl = dl.size
+    for j in range(nl):
+        xs[j] = dl[j] * rd - shift
+    if y > TABLE_YMAX:
+        for j in range(nl):
+            wr[j], wi[j] = faddeeva_fast(xs[j], y)
+        return
+    b1 = 5.5 - y
+    b2 = 15.0 - y
+    n1 = 0                       # x ≤ −b2, x ≤ −b1, x < b1, x < b2: the runs' ends
+    n2 = 0
+    n3 = 0
+    n4 = 0
+    for j in range(nl):
+        n1 += xs[j] <= -b2
+        n2 += xs[j] <= -b1
+        n3 += xs[j] < b1
+        n4 += xs[j] < b2
+    for j in range(n2, n3):
+        wr[j], wi[j] = w_table(xs[j], y)
+    for j in range(n1, n2):
+        wr[j], wi[j] = w_region2(xs[j], y)
+    for j in range(n3, n4):
+        wr[j], wi[j] = w_region2(xs[j], y)
+    for j in range(n1):
+        wr[j], wi[j] = w_region1(xs[j], y)
+    for j in range(n4, nl):
+        wr[j], wi[j] = w_region1(xs[j], y)
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath=_CONTRACT)
+def _sigma_vec(xs, y, vb, hp, fp, hs, fs, hd, fd):
+    """
+    σ profiles of all wavelengths from the π ones by `~gongsynth.sun.rt.voigt.sigma_taylor`, vb ≤ `VB_TAYLOR`.
+
+    In the wings too: the recurrence's error there stays below W4's own, < 4e-5 of the peak for vb ≤ 0.15.
+    """
+    for j in range(xs.size):
+        hs[j], fs[j], hd[j], fd[j] = sigma_taylor(xs[j], y, vb, hp[j], fp[j])
 
 
 _EXP2_NEG = np.ldexp(1.0, -np.arange(1080))          # 2⁻ⁿ
@@ -339,7 +367,7 @@ def _weights(dt, ex):
     return e, w0 - beta, beta
 
 
-@nb.njit(cache=True, error_model="numpy")
+@nb.njit(cache=True, error_model="numpy", fastmath=_CONTRACT)
 def _step(i0, i1, i2, i3, eu, ec, dt, ex, bu, bc):
     """One DELO-linear step of all wavelengths (4 × 4 solve; a loop the compiler vectorises)."""
     for j in range(i0.size):
@@ -354,16 +382,18 @@ def _step(i0, i1, i2, i3, eu, ec, dt, ex, bu, bc):
                                              y0, y1, y2, y3)
 
 
-@nb.njit(parallel=True, cache=True, error_model="numpy")
+@nb.njit(parallel=True, cache=True)
 def solve_columns(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all, damp_all, src_all, vlos,
                   bpar, b1, b2, out_i, out_q, out_u, out_v, log_tau_c, log_tau_core):
     """
     Emergent Stokes spectra of a block of rays.
 
     The DELO-linear solution of the module docstring over the same points as
-    `solve_columns_reference`, computed faster: all wavelengths are advanced
-    together point by point (independent work for the processor between the
-    steps of one recursion), the Faddeeva function is `faddeeva_fast`, and a ray
+    `solve_columns_reference`, computed faster (`_solve_ray`, one ray per
+    call; this parallel loop only hands out the rays, which keeps its
+    compilation short): all wavelengths are advanced together point by point
+    (independent work for the processor between the steps of one recursion),
+    w(z) in W4's regions as contiguous runs of wavelengths (`_w_vec`), and a ray
     with B = 0 at every integrated point takes the scalar solve (Q = U = V = 0
     exactly; I as the 4 × 4 solve gives it with zero off-diagonal elements).
     Each ray's result depends on that ray's data only (any block size, any threads).
@@ -371,7 +401,7 @@ def solve_columns(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all
     Parameters
     ----------
     lam_cm : (nλ,) float64
-        Wavelengths (cm, the line's rest wavelength scale).
+        Wavelengths (cm, the line's rest wavelength scale), increasing.
     lam0 : float
         Rest wavelength (cm).
     lande_g : float
@@ -393,144 +423,147 @@ def solve_columns(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all
     log_tau_c, log_tau_core : (ncol, nz) float32
         Filled with log10 of the continuum and ``core_index`` optical depth along the ray.
     """
-    ncol, nz = kc_all.shape
-    nl = lam_cm.size
+    ncol = kc_all.shape[0]
+    for j in range(lam_cm.size - 1):
+        if not lam_cm[j] < lam_cm[j + 1]:
+            raise ValueError("lam_cm must be strictly increasing")
     dl = lam_cm - lam0
     for p in nb.prange(ncol):
-        kc = kc_all[p]
-        kl = kl_all[p]
-        aa = damp_all[p]
-        bb = src_all[p]
-        pt = np.empty((9, nz))        # 1/Δλ_D, v_los, v_B, κ_L/2, 1 - cos²γ, 1 + cos²γ, cos 2χ, sin 2χ, cos γ
-        kmax = np.empty(nz)
-        magnetic = np.zeros(nz, dtype=np.bool_)
-        for k in range(nz):
-            dop = dop_all[p, k]
-            kmax[k] = kc[k] + kl[k]
-            pt[0, k] = 1.0 / dop
-            pt[1, k] = lam0 * vlos[p, k] / _C / dop
-            pt[3, k] = 0.5 * kl[k]
-            bz, bx, by = bpar[p, k], b1[p, k], b2[p, k]
-            b2sum = bz * bz + bx * bx + by * by
-            cg = 1.0
-            pt[2, k] = pt[6, k] = pt[7, k] = 0.0
-            if b2sum > 0.0:
-                magnetic[k] = True
-                pt[2, k] = ZEEMAN_CM_PER_G * lam0 * lam0 * lande_g * math.sqrt(b2sum) / dop
-                cg = bz / math.sqrt(b2sum)
-                pt[6, k] = (bx * bx - by * by) / b2sum
-                pt[7, k] = 2.0 * bx * by / b2sum
-            pt[4, k] = 1.0 - cg * cg
-            pt[5, k] = 1.0 + cg * cg
-            pt[8, k] = cg
-        tc = 0.0
-        tm = 0.0
-        log_tau_c[p, nz - 1] = -12.0
-        kbot = 0
-        ktop = nz - 1
-        for k in range(nz - 2, -1, -1):
-            tc += 0.5 * (kc[k] + kc[k + 1]) * ds[k]
-            tm += 0.5 * (kmax[k] + kmax[k + 1]) * ds[k]
-            log_tau_c[p, k] = math.log10(max(tc, 1e-12))
-            if tm <= TAU_TOP:
-                ktop = k
-            if tc < TAU_BOTTOM:
-                kbot = k
-        kbot = max(kbot - 1, 0)
-        ktop = max(ktop, kbot + 1)
-        polar = magnetic[kbot:ktop + 1].any()
-        wk = np.zeros((12, nl))
-        i0, i1, i2, i3, pr0, pr1 = wk[0], wk[1], wk[2], wk[3], wk[4], wk[5]
-        pr2, pr3, pr4, pr5, dt, ex = wk[6], wk[7], wk[8], wk[9], wk[10], wk[11]
-        eu = np.empty((7, nl))        # elements at the point below
-        ec = np.empty((7, nl))        # and at the current point
-        k = kbot
-        for j in range(nl):
-            e1 = _fast_elements(dl[j] * pt[0, k] - pt[1, k], aa[k], pt[2, k], kc[k], pt[3, k], pt[4, k],
-                                pt[5, k], pt[6, k], pt[7, k], pt[8, k])
-            en = _fast_elements(dl[j] * pt[0, k + 1] - pt[1, k + 1], aa[k + 1], pt[2, k + 1], kc[k + 1],
-                                pt[3, k + 1], pt[4, k + 1], pt[5, k + 1], pt[6, k + 1], pt[7, k + 1],
-                                pt[8, k + 1])
-            i0[j] = bb[k] + (bb[k] - bb[k + 1]) / (0.5 * (e1[0] + en[0]) * ds[k])
-            eu[0, j], eu[1, j], eu[2, j], eu[3, j], eu[4, j], eu[5, j], eu[6, j] = e1
-        for k in range(kbot + 1, ktop + 1):
-            dsk = ds[k - 1]
-            bu = bb[k - 1]
-            bc = bb[k]
-            rd, vs, vb, h, c1, c2 = pt[0, k], pt[1, k], pt[2, k], pt[3, k], pt[4, k], pt[5, k]
-            ak = aa[k]
-            if not polar:
-                if ak <= TABLE_YMAX:
-                    _eta_i_vec(dl, rd, vs, ak, kc[k], h, eu[0], dt, dsk)
-                else:
-                    for j in range(nl):
-                        hp = faddeeva_fast(dl[j] * rd - vs, ak)[0]
-                        ei = kc[k] + h * (hp * c1 + hp * c2)
-                        dt[j] = 0.5 * (eu[0, j] + ei) * dsk
-                        eu[0, j] = ei
-                for j in range(nl):
-                    ex[j] = _exp_neg(dt[j])
-                for j in range(nl):
-                    e, al, be = _weights(dt[j], ex[j])
-                    i0[j] = e * i0[j] + al * bc + be * bu
-                continue
-            cq, cu, cv = pt[6, k], pt[7, k], pt[8, k]
-            if vb <= VB_TAYLOR and ak <= TABLE_YMAX:
-                _profiles_vec(dl, rd, vs, ak, vb, pr0, pr1, pr2, pr3, pr4, pr5)
-            for j in range(nl if vb > VB_TAYLOR or ak > TABLE_YMAX else 0):
-                v = dl[j] * rd - vs
-                hp, fp = faddeeva_fast(v, ak)
-                pr0[j] = hp
-                pr1[j] = fp
-                if vb == 0.0:
-                    pr2[j] = hp
-                    pr3[j] = fp
-                    pr4[j] = 0.0
-                    pr5[j] = 0.0
-                elif vb <= VB_TAYLOR and abs(v) + ak < 5.5 and ak <= TABLE_YMAX:
-                    pr2[j], pr3[j], pr4[j], pr5[j] = sigma_taylor(v, ak, vb, hp, fp)
-                else:
-                    hb, fb = faddeeva_fast(v + vb, ak)
-                    hr, fr = faddeeva_fast(v - vb, ak)
-                    pr2[j] = 0.5 * (hb + hr)
-                    pr3[j] = 0.5 * (fb + fr)
-                    pr4[j] = hr - hb
-                    pr5[j] = fr - fb
-            kck = kc[k]
+        _solve_ray(dl, lam0, lande_g, core_index, ds, kc_all[p], kl_all[p], dop_all[p], damp_all[p],
+                   src_all[p], vlos[p], bpar[p], b1[p], b2[p], out_i[p], out_q[p], out_u[p], out_v[p],
+                   log_tau_c[p], log_tau_core[p])
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath=_CONTRACT)
+def _solve_ray(dl, lam0, lande_g, core_index, ds, kc, kl, dop_k, aa, bb, vlos, bpar, b1, b2, out_i, out_q,
+               out_u, out_v, log_tau_c, log_tau_core):
+    """One ray of `solve_columns` (its arguments for that ray; ``dl`` = λ − λ₀)."""
+    nz = kc.size
+    nl = dl.size
+    pt = np.empty((9, nz))        # 1/Δλ_D, v_los, v_B, κ_L/2, 1 - cos²γ, 1 + cos²γ, cos 2χ, sin 2χ, cos γ
+    kmax = np.empty(nz)
+    magnetic = np.zeros(nz, dtype=np.bool_)
+    for k in range(nz):
+        dop = dop_k[k]
+        kmax[k] = kc[k] + kl[k]
+        pt[0, k] = 1.0 / dop
+        pt[1, k] = lam0 * vlos[k] / _C / dop
+        pt[3, k] = 0.5 * kl[k]
+        bz, bx, by = bpar[k], b1[k], b2[k]
+        b2sum = bz * bz + bx * bx + by * by
+        cg = 1.0
+        pt[2, k] = pt[6, k] = pt[7, k] = 0.0
+        if b2sum > 0.0:
+            magnetic[k] = True
+            pt[2, k] = ZEEMAN_CM_PER_G * lam0 * lam0 * lande_g * math.sqrt(b2sum) / dop
+            cg = bz / math.sqrt(b2sum)
+            pt[6, k] = (bx * bx - by * by) / b2sum
+            pt[7, k] = 2.0 * bx * by / b2sum
+        pt[4, k] = 1.0 - cg * cg
+        pt[5, k] = 1.0 + cg * cg
+        pt[8, k] = cg
+    tc = 0.0
+    tm = 0.0
+    log_tau_c[nz - 1] = -12.0
+    kbot = 0
+    ktop = nz - 1
+    for k in range(nz - 2, -1, -1):
+        tc += 0.5 * (kc[k] + kc[k + 1]) * ds[k]
+        tm += 0.5 * (kmax[k] + kmax[k + 1]) * ds[k]
+        log_tau_c[k] = math.log10(max(tc, 1e-12))
+        if tm <= TAU_TOP:
+            ktop = k
+        if tc < TAU_BOTTOM:
+            kbot = k
+    kbot = max(kbot - 1, 0)
+    ktop = max(ktop, kbot + 1)
+    polar = magnetic[kbot:ktop + 1].any()
+    wk = np.zeros((16, nl))
+    i0, i1, i2, i3, pr0, pr1 = wk[0], wk[1], wk[2], wk[3], wk[4], wk[5]
+    pr2, pr3, pr4, pr5, dt, ex = wk[6], wk[7], wk[8], wk[9], wk[10], wk[11]
+    xs, xb, wbr, wbi = wk[12], wk[13], wk[14], wk[15]
+    eu = np.empty((7, nl))        # elements at the point below
+    ec = np.empty((7, nl))        # and at the current point
+    k = kbot
+    for j in range(nl):
+        e1 = _fast_elements(dl[j] * pt[0, k] - pt[1, k], aa[k], pt[2, k], kc[k], pt[3, k], pt[4, k],
+                            pt[5, k], pt[6, k], pt[7, k], pt[8, k])
+        en = _fast_elements(dl[j] * pt[0, k + 1] - pt[1, k + 1], aa[k + 1], pt[2, k + 1], kc[k + 1],
+                            pt[3, k + 1], pt[4, k + 1], pt[5, k + 1], pt[6, k + 1], pt[7, k + 1],
+                            pt[8, k + 1])
+        i0[j] = bb[k] + (bb[k] - bb[k + 1]) / (0.5 * (e1[0] + en[0]) * ds[k])
+        eu[0, j], eu[1, j], eu[2, j], eu[3, j], eu[4, j], eu[5, j], eu[6, j] = e1
+    for k in range(kbot + 1, ktop + 1):
+        dsk = ds[k - 1]
+        bu = bb[k - 1]
+        bc = bb[k]
+        rd, vs, vb, h, c1, c2 = pt[0, k], pt[1, k], pt[2, k], pt[3, k], pt[4, k], pt[5, k]
+        ak = aa[k]
+        kck = kc[k]
+        _w_vec(dl, rd, vs, ak, xs, pr0, pr1)
+        if not polar:
             for j in range(nl):
-                ei = kck + h * (pr0[j] * c1 + pr2[j] * c2)
-                g = h / ei
-                t = g * (pr0[j] - pr2[j])
-                r = g * (pr1[j] - pr3[j])
-                ec[0, j] = ei
-                ec[1, j] = t * cq
-                ec[2, j] = t * cu
-                ec[3, j] = g * pr4[j] * cv
-                ec[4, j] = r * cq
-                ec[5, j] = r * cu
-                ec[6, j] = g * pr5[j] * cv
+                ei = kck + h * (pr0[j] * c1 + pr0[j] * c2)
                 dt[j] = 0.5 * (eu[0, j] + ei) * dsk
+                eu[0, j] = ei
             for j in range(nl):
                 ex[j] = _exp_neg(dt[j])
-            _step(i0, i1, i2, i3, eu, ec, dt, ex, bu, bc)
-            eu, ec = ec, eu
-        for j in range(nl):
-            out_i[p, j] = i0[j]
-            out_q[p, j] = i1[j]
-            out_u[p, j] = i2[j]
-            out_v[p, j] = i3[j]
-        if core_index < 0:
+            for j in range(nl):
+                e, al, be = _weights(dt[j], ex[j])
+                i0[j] = e * i0[j] + al * bc + be * bu
             continue
-        # Optical depth at the core wavelength along the whole ray.
-        j = core_index
-        tau = 0.0
-        log_tau_core[p, nz - 1] = -12.0
-        k = nz - 1
-        en0 = _fast_elements(dl[j] * pt[0, k] - pt[1, k], aa[k], pt[2, k], kc[k], pt[3, k], pt[4, k],
+        cq, cu, cv = pt[6, k], pt[7, k], pt[8, k]
+        if vb == 0.0:
+            for j in range(nl):
+                pr2[j] = pr0[j]
+                pr3[j] = pr1[j]
+                pr4[j] = 0.0
+                pr5[j] = 0.0
+        elif vb <= VB_TAYLOR and ak <= TABLE_YMAX:
+            _sigma_vec(xs, ak, vb, pr0, pr1, pr2, pr3, pr4, pr5)
+        else:
+            _w_vec(dl, rd, vs - vb, ak, xb, pr2, pr3)            # w(x + vb)
+            _w_vec(dl, rd, vs + vb, ak, xb, wbr, wbi)            # w(x − vb)
+            for j in range(nl):
+                hb, fb = pr2[j], pr3[j]
+                pr2[j] = 0.5 * (hb + wbr[j])
+                pr3[j] = 0.5 * (fb + wbi[j])
+                pr4[j] = wbr[j] - hb
+                pr5[j] = wbi[j] - fb
+        for j in range(nl):
+            ei = kck + h * (pr0[j] * c1 + pr2[j] * c2)
+            g = h / ei
+            t = g * (pr0[j] - pr2[j])
+            r = g * (pr1[j] - pr3[j])
+            ec[0, j] = ei
+            ec[1, j] = t * cq
+            ec[2, j] = t * cu
+            ec[3, j] = g * pr4[j] * cv
+            ec[4, j] = r * cq
+            ec[5, j] = r * cu
+            ec[6, j] = g * pr5[j] * cv
+            dt[j] = 0.5 * (eu[0, j] + ei) * dsk
+        for j in range(nl):
+            ex[j] = _exp_neg(dt[j])
+        _step(i0, i1, i2, i3, eu, ec, dt, ex, bu, bc)
+        eu, ec = ec, eu
+    for j in range(nl):
+        out_i[j] = i0[j]
+        out_q[j] = i1[j]
+        out_u[j] = i2[j]
+        out_v[j] = i3[j]
+    if core_index < 0:
+        return
+    # Optical depth at the core wavelength along the whole ray.
+    j = core_index
+    tau = 0.0
+    log_tau_core[nz - 1] = -12.0
+    k = nz - 1
+    en0 = _fast_elements(dl[j] * pt[0, k] - pt[1, k], aa[k], pt[2, k], kc[k], pt[3, k], pt[4, k],
+                         pt[5, k], pt[6, k], pt[7, k], pt[8, k])[0]
+    for k in range(nz - 2, -1, -1):
+        ec0 = _fast_elements(dl[j] * pt[0, k] - pt[1, k], aa[k], pt[2, k], kc[k], pt[3, k], pt[4, k],
                              pt[5, k], pt[6, k], pt[7, k], pt[8, k])[0]
-        for k in range(nz - 2, -1, -1):
-            ec0 = _fast_elements(dl[j] * pt[0, k] - pt[1, k], aa[k], pt[2, k], kc[k], pt[3, k], pt[4, k],
-                                 pt[5, k], pt[6, k], pt[7, k], pt[8, k])[0]
-            tau += 0.5 * (ec0 + en0) * ds[k]
-            log_tau_core[p, k] = math.log10(max(tau, 1e-12))
-            en0 = ec0
+        tau += 0.5 * (ec0 + en0) * ds[k]
+        log_tau_core[k] = math.log10(max(tau, 1e-12))
+        en0 = ec0
