@@ -120,3 +120,14 @@ def test_from_dict_errors():
         HMIInstrument.from_dict({"name": "gong"})
     with pytest.raises(ValueError, match="is not a quantity"):
         HMIInstrument.from_dict({"plate_scale": "wide"})
+
+
+def test_tiled_default_detector_is_the_instruments():
+    """A tiled HMI run without --shape gets 1024² of the CCD; full disk its 4096²; GONG 860 either way."""
+    from gongsynth.config import SimulationConfig
+    assert HMIInstrument.tiled_detector_shape == 1024 < HMIInstrument().detector_shape == 4096
+    assert SimulationConfig(seed=1, instrument="hmi").detector_pixels == 1024
+    assert SimulationConfig(seed=1, instrument="hmi", mode="full-disk").detector_pixels == 4096
+    assert SimulationConfig(seed=1, instrument="hmi", detector_shape=64).detector_pixels == 64
+    assert SimulationConfig(seed=1).detector_pixels == 860
+    assert SimulationConfig(seed=1, mode="full-disk").detector_pixels == 860

@@ -100,6 +100,10 @@ class InstrumentParameters:
 
     name: ClassVar[str] = ""
     RANGES: ClassVar[dict] = {}
+    #: Detector side of a tiled run that names none; None: the whole detector
+    #: (``detector_shape``).  The tiled scene repeats one small box, so a field of many
+    #: boxes shows nothing new at a higher cost (HMI's 4096² CCD: 1024).
+    tiled_detector_shape: ClassVar[int | None] = None
 
     def __post_init__(self):
         cls = type(self).__name__
