@@ -31,8 +31,11 @@ Every instrument: what the authors set in GONG pixels is kept as the angle on
 the Sun it spans (`PIXEL_SCALE_OF_THE_PAPER`, 2.5″), so that two instruments
 looking at the same Sun select the same regions: the sunspot mask is dilated
 by 17.5″ (7 GONG pixels, 35 HMI pixels of 0.504″) and the bootstrap blocks are
-10″ wide (4 GONG pixels, 20 HMI pixels).  ``min_outer`` and the numbers of
-bins count pixels and bins, not angles, and stay the authors'.
+10″ wide (4 GONG pixels, 20 HMI pixels).  The sunspot's continuum threshold
+is applied to the continuum seen at GONG's resolution (`gong_resolution`,
+6.5″), since at HMI's the intergranular lanes fall below it.  ``min_outer``
+and the numbers of bins count pixels and bins, not angles, and stay the
+authors'.
 
 Because the curve is E[truth | measured], noise in the measured values pulls
 it towards zero (regression dilution): that is part of what a calibration of
@@ -50,8 +53,8 @@ from gongsynth.analysis.calibration import gauss_values
 from gongsynth.seeding import stage_generator
 
 __all__ = ["PAPER_BINS", "PIXEL_SCALE_OF_THE_PAPER", "QUIET_LIMIT", "FluxConservingCurve", "WeakFluxFactor",
-           "flux_conserving_fit", "paper_pixels", "paper_bins", "paper_regions", "region_pixels",
-           "weak_flux_factor", "weak_flux_factor_difference"]
+           "flux_conserving_fit", "gong_resolution", "paper_pixels", "paper_bins", "paper_regions",
+           "region_pixels", "weak_flux_factor", "weak_flux_factor_difference"]
 
 #: The authors' numbers of bins per viewing angle (deg): (quiet Sun, sunspot).
 PAPER_BINS = {0: (35, 21), 25: (21, 9), 45: (15, 7), 60: (9, 7), 70: (7, 7), 75: (7, 7)}
@@ -281,9 +284,52 @@ def paper_pixels(gong_pixels, smap=None):
     return max(1, int(round(angle / abs(pixel))))
 
 
+def gong_resolution():
+    """
+    The FWHM of GONG's view: seeing ⊗ the aperture's Airy core ⊗ the 2.5″ pixel, in quadrature.
+
+    The scale on which the authors' continuum threshold was set: 3.6″ seeing,
+    1.03 λ/D = 5.1″ for 2.8 cm at 676.8 nm, and the pixel's box (σ = 2.5″/√12).
+
+    Returns
+    -------
+    `~astropy.units.Quantity`
+        In arcsec (6.5″ for GONG's defaults).
+
+    Examples
+    --------
+    >>> print(f"{gong_resolution():.2f}")
+    6.50 arcsec
+    """
+    from gongsynth.instruments import get
+    gong = get("gong")
+    airy = (1.03 * gong.line_wavelength / gong.aperture * u.rad).to(u.arcsec)
+    pixel = gong.plate_scale / math.sqrt(12) * math.sqrt(8 * math.log(2))
+    return np.sqrt(gong.seeing_fwhm ** 2 + airy ** 2 + pixel ** 2).to(u.arcsec)
+
+
+def _at_gong_resolution(light, fill, smap):
+    """
+    The continuum as GONG would see it at the map's own pixels: unchanged for pixels of GONG's size or
+    larger, else smoothed by a Gaussian of `gong_resolution` (NaN filled with ``fill`` first).
+
+    Without it a finer map's intergranular lanes fall below the authors' threshold (15 % of HMI's
+    quiet pixels at 0.504″), and the 17.5″ dilation turns the whole field into "sunspot".
+    """
+    if paper_pixels(1, smap) <= 1:
+        return light
+    pixel = abs(u.Quantity(smap.scale.axis1).to_value(u.arcsec / u.pix))
+    sigma = gong_resolution().to_value(u.arcsec) / pixel / math.sqrt(8 * math.log(2))
+    return scipy.ndimage.gaussian_filter(np.where(np.isfinite(light), light, fill), sigma, mode="nearest")
+
+
 def paper_regions(magnetogram, continuum, *, latitude=0 * u.deg, usable=None, dilation=None):
     """
     The authors' quiet-Sun and sunspot pixels of a magnetogram.
+
+    The sunspot is where the continuum, seen at GONG's resolution, is darker
+    than 0.92 × the quiet-Sun median: a map with pixels finer than GONG's
+    (its ``scale``) has its continuum smoothed to `gong_resolution` first.
 
     Parameters
     ----------
@@ -314,7 +360,8 @@ def paper_regions(magnetogram, continuum, *, latitude=0 * u.deg, usable=None, di
         raise ValueError("no usable pixels (all NaN or masked)")
     limit = QUIET_LIMIT.to_value(u.G) * math.cos(u.Quantity(latitude, u.deg).to_value(u.rad))
     calm = usable & (np.abs(b) < limit)
-    dark = usable & (light < _SPOT_DARKNESS * np.median(light[calm if calm.any() else usable]))
+    reference = np.median(light[calm if calm.any() else usable])
+    dark = usable & (_at_gong_resolution(light, reference, magnetogram) < _SPOT_DARKNESS * reference)
     side = paper_pixels(_SPOT_DILATION, magnetogram) if dilation is None else int(dilation)
     if side < 1:
         raise ValueError(f"dilation must be a positive number of pixels, got {dilation!r}")
