@@ -13,6 +13,8 @@ from::
 
     python scripts/instrument_weak_flux.py --latitudes 0 60 --seeds 1 2 \
         --record iwf.jsonl --out gongsynth/data/instrument_weak_flux.ecsv
+    python scripts/instrument_weak_flux.py --instruments hmi --latitudes 0 --seeds 1 2 \
+        --duration 720 --record iwf.jsonl --out gongsynth/data/instrument_weak_flux.ecsv --append
 
 Each run's factor is appended to ``--record`` as soon as it is known, so an
 interrupted sweep keeps what it measured; ``--summarise iwf.jsonl --out T``
@@ -27,18 +29,18 @@ from pathlib import Path
 
 import astropy.units as u
 import numpy as np
-from astropy.table import QTable
+from astropy.table import QTable, vstack
 
 import gongsynth
 
 
-def measure(instrument, latitude, seeds, record):
+def measure(instrument, latitude, seeds, record, duration=None):
     """Run one instrument at one latitude for every seed; return its table row."""
     results, per_seed, seconds = [], [], []
     for seed in seeds:
         start = time.perf_counter()
         result = gongsynth.simulate(instrument=instrument, latitude=latitude * u.deg, seed=seed,
-                                    progress=False)
+                                    duration=duration, progress=False)
         seconds.append(time.perf_counter() - start)
         fit = gongsynth.weak_flux_factor(result)
         per_seed.append(fit.factor)
@@ -73,8 +75,8 @@ def from_records(path):
             for (name, latitude), entries in groups.items()]
 
 
-def write_table(rows, out):
-    """The rows as an ECSV QTable with its provenance."""
+def write_table(rows, out, append=False):
+    """The rows as an ECSV QTable with its provenance (after the rows already in ``out`` if ``append``)."""
     table = QTable()
     table["instrument"] = [r["instrument"] for r in rows]
     table["latitude"] = [r["latitude"] for r in rows] * u.deg
@@ -87,13 +89,17 @@ def write_table(rows, out):
     table["detector"] = [r["detector"] for r in rows]
     table["duration"] = [r["duration_s"] for r in rows] * u.s
     table["run_time"] = [r["seconds"] for r in rows] * u.s
+    if append and Path(out).exists():
+        old = QTable.read(out, format="ascii.ecsv")
+        table.meta.update(old.meta)
+        table = vstack([old, table], metadata_conflicts="silent")
     table.meta.update({
         "description": "The papers' quiet-Sun weak-flux factor (truth through the PSF, 1x quadrant) of each "
                        "instrument on the default 3-D Sun with the same seeds: factor = mean over seeds, "
                        "uncertainty = standard error over seeds, pooled = one fit to all seeds' pixels "
                        "(pooled_uncertainty: its block bootstrap, pixel noise only); each instrument's "
                        "default duration and tiled detector; run_time = mean wall time of one run.",
-        "seeds": sorted({s for r in rows for s in r["seeds"]}),
+        "seeds": sorted({int(s) for r in rows for s in r["seeds"]} | set(table.meta.get("seeds", []))),
         "script": "scripts/instrument_weak_flux.py",
         "commit": subprocess.run(["git", "describe", "--always", "--dirty"], capture_output=True, text=True,
                                  cwd=Path(__file__).parent).stdout.strip(),
@@ -109,15 +115,18 @@ def main(argv=None):
     parser.add_argument("--instruments", nargs="+", default=list(gongsynth.instruments.names()))
     parser.add_argument("--latitudes", type=float, nargs="+", default=[0, 60])
     parser.add_argument("--seeds", type=int, nargs="+", default=[1, 2])
+    parser.add_argument("--duration", type=float, help="seconds (default: each instrument's own)")
+    parser.add_argument("--append", action="store_true", help="add the rows to those already in --out")
     parser.add_argument("--record", help="append one JSON line per run to this file")
     parser.add_argument("--summarise", metavar="JSONL", help="only write --out from these records")
     parser.add_argument("--out", required=True, help="the ECSV table")
     args = parser.parse_args(argv)
     if args.summarise:
         return write_table(from_records(args.summarise), args.out)
-    rows = [measure(name, latitude, args.seeds, args.record)
+    duration = None if args.duration is None else args.duration * u.s
+    rows = [measure(name, latitude, args.seeds, args.record, duration)
             for latitude in args.latitudes for name in args.instruments]
-    write_table(rows, args.out)
+    write_table(rows, args.out, append=args.append)
 
 
 if __name__ == "__main__":
