@@ -12,9 +12,9 @@ its block-bootstrap uncertainty (pixel noise only).  The docs' numbers came
 from::
 
     python scripts/instrument_weak_flux.py --latitudes 0 60 --seeds 1 2 \
-        --record iwf.jsonl --out gongsynth/data/instrument_weak_flux.ecsv
+        --record iwf.jsonl --out docs/guide/instrument_weak_flux.ecsv
     python scripts/instrument_weak_flux.py --instruments hmi --latitudes 0 --seeds 1 2 \
-        --duration 720 --record iwf.jsonl --out gongsynth/data/instrument_weak_flux.ecsv --append
+        --duration 720 --record iwf.jsonl --out docs/guide/instrument_weak_flux.ecsv --append
 
 Each run's factor is appended to ``--record`` as soon as it is known, so an
 interrupted sweep keeps what it measured; ``--summarise iwf.jsonl --out T``
@@ -97,12 +97,14 @@ def write_table(rows, out, append=False):
         "description": "The papers' quiet-Sun weak-flux factor (truth through the PSF, 1x quadrant) of each "
                        "instrument on the default 3-D Sun with the same seeds: factor = mean over seeds, "
                        "uncertainty = standard error over seeds, pooled = one fit to all seeds' pixels "
-                       "(pooled_uncertainty: its block bootstrap, pixel noise only); each instrument's "
-                       "default duration and tiled detector; run_time = mean wall time of one run.",
+                       "(pooled_uncertainty: its block bootstrap, pixel noise only); duration: the "
+                       "instrument's default unless given; each instrument's default tiled detector; "
+                       "run_time = mean wall time of one run.",
         "seeds": sorted({int(s) for r in rows for s in r["seeds"]} | set(table.meta.get("seeds", []))),
         "script": "scripts/instrument_weak_flux.py",
-        "commit": subprocess.run(["git", "describe", "--always", "--dirty"], capture_output=True, text=True,
-                                 cwd=Path(__file__).parent).stdout.strip(),
+        "commits": list(table.meta.get("commits", [])) + [
+            subprocess.run(["git", "describe", "--always", "--dirty"], capture_output=True, text=True,
+                           cwd=Path(__file__).parent).stdout.strip()],
         "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
     })
     table.write(out, format="ascii.ecsv", overwrite=True)
