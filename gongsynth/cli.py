@@ -134,7 +134,8 @@ def build_parser():
     sim.add_argument("--seed", type=_number(int, minimum=0),
                      help="root random seed (default: fresh, recorded)")
     sim.add_argument("--shape", type=_number(int, minimum=8), metavar="N",
-                     help="detector side in pixels (default 860)")
+                     help="detector side in pixels (default: the instrument's; GONG 860, "
+                          "HMI 1024 tiled and 4096 full-disk)")
     sim.add_argument("--workers", type=_number(int, minimum=1), metavar="N",
                      help="parallel workers: threads for one run, Dask workers for a sweep")
     sim.add_argument("--sun", choices=tuple(SUNS),

@@ -57,8 +57,9 @@ _DOCS = {
     "engine": "camera engine: 'blocks' (fast, statistically exact) or 'frames' (frame by frame)",
     "mode": "'tiled' (the paper's tiling at several resolutions) or 'full-disk'",
     "seed": "root random seed (int); unset: fresh entropy each run, recorded in the run's config.toml",
-    "detector_shape": "detector side in pixels (GONG: 860; smaller for quick runs)",
-    "resolutions": "tiled mode: magnification of the tile in each quadrant (1 = GONG resolution)",
+    "detector_shape": "detector side in pixels; unset: the instrument's (GONG 860; HMI 1024 tiled, "
+                      "4096 full disk)",
+    "resolutions": "tiled mode: magnification of the tile in each quadrant (1 = true size)",
     "obstime": "observation time (ISO); sets the observer position and the map dates",
     "photosphere_shape": "columns of the built-in Sun (ny, nx); unset: that Sun's default",
     "sun": "the built-in Sun: 'milne-eddington' (columns, fast) or 'model-atmosphere' (3-D, LTE transfer)",
@@ -275,7 +276,9 @@ class SimulationConfig:
         Root seed; ``None`` (the default) draws fresh entropy, reduced to an
         int that the config then holds, so the run can be repeated.
     detector_shape : int or None
-        Detector side in pixels; ``None`` uses the instrument's (860).
+        Detector side in pixels; ``None`` uses the instrument's: its whole
+        detector (GONG 860, HMI 4096) or, in tiled mode, its
+        ``tiled_detector_shape`` where it has one (HMI 1024).
     resolutions : tuple of int
         Tile magnifications of the quadrants in tiled mode.
     obstime : str
@@ -472,8 +475,21 @@ class SimulationConfig:
 
     @property
     def detector_pixels(self):
-        """Detector side in pixels (the instrument's if ``detector_shape`` is None)."""
-        return self.instrument.detector_shape if self.detector_shape is None else self.detector_shape
+        """
+        Detector side in pixels: ``detector_shape``, or if None the instrument's (see `SimulationConfig`).
+
+        Examples
+        --------
+        >>> SimulationConfig(seed=1).detector_pixels
+        860
+        >>> [SimulationConfig(seed=1, instrument="hmi", mode=mode).detector_pixels
+        ...  for mode in ("tiled", "full-disk")]
+        [1024, 4096]
+        """
+        if self.detector_shape is not None:
+            return self.detector_shape
+        tiled = getattr(self.instrument, "tiled_detector_shape", None) if self.mode == "tiled" else None
+        return self.instrument.detector_shape if tiled is None else tiled
 
     @property
     def network_on(self):

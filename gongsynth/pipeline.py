@@ -183,7 +183,8 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=None, engine="blocks",
     mode : {"tiled", "full-disk"}
         The paper's tiling, or the photosphere mapped over the visible disk.
     detector_shape : int, optional
-        Detector side in pixels (default the instrument's 860).
+        Detector side in pixels (default the instrument's: GONG 860; HMI 1024
+        in tiled mode, its whole 4096 CCD over the full disk).
     resolutions : tuple of int
         Tiled mode: tile magnification of each quadrant.
     obstime : str or `~astropy.time.Time`, optional

@@ -1,4 +1,5 @@
 """HMIInstrument: defaults with sources, the family contract, TOML round trip, bad input."""
+import dataclasses
 import math
 
 import astropy.units as u
@@ -26,8 +27,8 @@ def test_contract_attributes():
 
 
 def test_every_field_has_a_source():
-    for name in HMIInstrument.__dataclass_fields__:
-        assert len(HMIInstrument.source(name)) > 10
+    for f in dataclasses.fields(HMIInstrument):
+        assert len(HMIInstrument.source(f.name)) > 10
     with pytest.raises(KeyError, match="no parameter"):
         HMIInstrument.source("nope")
 
@@ -97,11 +98,14 @@ def test_replace_and_resolve():
 @pytest.mark.parametrize("changes, error, match", [
     ({"plate_scale": 0.5}, TypeError, "plate_scale must be an astropy Quantity"),
     ({"plate_scale": 0.5 * u.s}, u.UnitsError, "plate_scale must have units"),
-    ({"plate_scale": -0.5 * u.arcsec}, ValueError, "plate_scale must be > 0"),
-    ({"nb_contrast": 1.2}, ValueError, "nb_contrast must lie in"),
-    ({"detector_shape": 0}, TypeError, "detector_shape must be a positive int"),
-    ({"read_noise": -1 * u.adu}, ValueError, "read_noise must be >= 0"),
-    ({"quadrature_step": 3 * u.nm}, ValueError, "quadrature_step"),
+    ({"plate_scale": -0.5 * u.arcsec}, ValueError, r"plate_scale must lie in \(0, inf\) arcsec"),
+    ({"nb_contrast": 1.2}, ValueError, r"nb_contrast must lie in \(0, 1\]"),
+    ({"detector_shape": 0}, ValueError, r"detector_shape must lie in \[1, inf\)"),
+    ({"detector_shape": 2.0}, TypeError, "detector_shape must be a non-negative int"),
+    ({"adc_bits": 32}, ValueError, r"adc_bits must lie in \[1, 31\]"),
+    ({"read_noise": -1 * u.adu}, ValueError, r"read_noise must lie in \[0, inf\)"),
+    ({"quadrature_step": 3 * u.nm}, ValueError, "quadrature_step .* smaller than integration_half_width"),
+    ({"lut_velocity_step": 10 * u.km / u.s}, ValueError, "lut_velocity_step .* must be smaller"),
     ({"exposure_time": math.nan * u.s}, ValueError, "finite scalar"),
 ])
 def test_bad_values_are_named(changes, error, match):
@@ -112,7 +116,18 @@ def test_bad_values_are_named(changes, error, match):
 def test_from_dict_errors():
     with pytest.raises(KeyError, match="unknown key"):
         HMIInstrument.from_dict({"colour": 1})
-    with pytest.raises(ValueError, match="is not 'hmi'"):
+    with pytest.raises(ValueError, match="name = 'gong', but HMIInstrument is 'hmi'"):
         HMIInstrument.from_dict({"name": "gong"})
     with pytest.raises(ValueError, match="is not a quantity"):
         HMIInstrument.from_dict({"plate_scale": "wide"})
+
+
+def test_tiled_default_detector_is_the_instruments():
+    """A tiled HMI run without --shape gets 1024² of the CCD; full disk its 4096²; GONG 860 either way."""
+    from gongsynth.config import SimulationConfig
+    assert HMIInstrument.tiled_detector_shape == 1024 < HMIInstrument().detector_shape == 4096
+    assert SimulationConfig(seed=1, instrument="hmi").detector_pixels == 1024
+    assert SimulationConfig(seed=1, instrument="hmi", mode="full-disk").detector_pixels == 4096
+    assert SimulationConfig(seed=1, instrument="hmi", detector_shape=64).detector_pixels == 64
+    assert SimulationConfig(seed=1).detector_pixels == 860
+    assert SimulationConfig(seed=1, mode="full-disk").detector_pixels == 860

@@ -110,3 +110,54 @@ def test_paired_difference_of_two_runs():
                                sun="milne-eddington", resolutions=(1,), progress=False)
     with pytest.raises(ValueError, match="latitude"):
         weak_flux_factor_difference(result, other)
+
+
+def test_the_papers_pixel_lengths_are_angles_on_the_sun():
+    """The sunspot mask is the authors' in any map's pixels: dilation by 17.5 arcsec (7 GONG pixels),
+    and the continuum threshold on the continuum seen at GONG's resolution."""
+    import sunpy.map
+
+    from gongsynth.analysis.weak_flux import gong_resolution, paper_pixels
+
+    def as_map(data, scale):
+        return sunpy.map.Map(data, {"cdelt1": scale, "cdelt2": scale, "cunit1": "arcsec",
+                                    "cunit2": "arcsec", "ctype1": "HPLN-TAN", "ctype2": "HPLT-TAN"})
+
+    def rows(mask):
+        return int(mask.any(axis=1).sum())
+
+    light = np.ones((201, 201))
+    light[80:121, 80:121] = 0.5                          # a 41-pixel dark square
+    field = np.zeros_like(light)
+    assert paper_pixels(7, as_map(field, 2.5)) == 7 and paper_pixels(7, as_map(field, 0.504)) == 35
+    # GONG's pixels: no smoothing, a side-7 dilation: 41 + 7 - 1 rows.
+    assert rows(paper_regions(as_map(field, 2.5), light)[1]) == 47
+    assert rows(paper_regions(field, light)[1]) == 47            # a plain array: GONG pixels
+    # HMI's: a side-35 dilation of the square seen at 6.5 arcsec, which reaches 0.92 about one
+    # Gaussian sigma (5.5 pixels) outside the square's edge.
+    sigma = gong_resolution().to_value(u.arcsec) / 0.504 / 2.3548
+    hmi_rows = rows(paper_regions(as_map(field, 0.504), light)[1])
+    assert 41 + 35 - 1 + 2 * (sigma - 1) <= hmi_rows <= 41 + 35 - 1 + 2 * (sigma + 1)
+    # Lanes 10 % dark on a 4-pixel grid: resolved granulation.  Below the threshold pixel by pixel,
+    # above it at GONG's resolution: no sunspot for HMI, all "sunspot" for GONG-sized pixels.
+    lanes = np.ones((120, 120))
+    lanes[2::4] = lanes[:, 2::4] = 0.9
+    assert not paper_regions(as_map(np.zeros_like(lanes), 0.504), lanes)[1].any()
+    assert paper_regions(np.zeros_like(lanes), lanes)[1].all()
+    assert paper_regions(field, light, dilation=1)[1].sum() == 41 * 41
+    with pytest.raises(ValueError, match="dilation"):
+        paper_regions(field, light, dilation=0)
+
+
+def test_weak_flux_factor_of_an_hmi_run():
+    """weak_flux_factor works for HMI; its bootstrap blocks are 10 arcsec: 20 HMI pixels by default."""
+    import gongsynth
+
+    result = gongsynth.simulate(instrument="hmi", seed=6, detector_shape=64, sun="milne-eddington",
+                                photosphere_shape=(128, 128), photosphere={"spot": False},
+                                resolutions=(1,), progress=False)
+    factor = weak_flux_factor(result, n_boot=10)
+    assert factor.factor > 0 and np.isfinite(factor.uncertainty) and factor.uncertainty > 0
+    same = weak_flux_factor(result, n_boot=10, block=20)
+    assert (same.factor, same.uncertainty) == (factor.factor, factor.uncertainty)
+    assert weak_flux_factor(result, n_boot=10, block=4).uncertainty != factor.uncertainty

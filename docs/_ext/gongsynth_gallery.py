@@ -16,6 +16,7 @@ ORDER = [
     "plot_tiling.py",
     "plot_frame_schedule.py",
     "plot_magnetograms.py",
+    "plot_one_sun_gong_and_hmi.py",
     "plot_full_disk.py",
     "plot_full_disk_vs_real.py",
     "plot_compare_real.py",

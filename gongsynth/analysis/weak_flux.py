@@ -27,6 +27,16 @@ threshold and dilation).  Only the native-resolution (1×) part of a tiled
 field is used.  The number of bins follows the authors per viewing angle
 (`PAPER_BINS`).
 
+Every instrument: what the authors set in GONG pixels is kept as the angle on
+the Sun it spans (`PIXEL_SCALE_OF_THE_PAPER`, 2.5″), so that two instruments
+looking at the same Sun select the same regions: the sunspot mask is dilated
+by 17.5″ (7 GONG pixels, 35 HMI pixels of 0.504″) and the bootstrap blocks are
+10″ wide (4 GONG pixels, 20 HMI pixels).  The sunspot's continuum threshold
+is applied to the continuum seen at GONG's resolution (`gong_resolution`,
+6.5″), since at HMI's the intergranular lanes fall below it.  ``min_outer``
+and the numbers of bins count pixels and bins, not angles, and stay the
+authors'.
+
 Because the curve is E[truth | measured], noise in the measured values pulls
 it towards zero (regression dilution): that is part of what a calibration of
 noisy maps must do, and the reason the factor depends on the noise of the
@@ -42,9 +52,9 @@ import scipy.ndimage
 from gongsynth.analysis.calibration import gauss_values
 from gongsynth.seeding import stage_generator
 
-__all__ = ["PAPER_BINS", "QUIET_LIMIT", "FluxConservingCurve", "WeakFluxFactor",
-           "flux_conserving_fit", "paper_bins", "paper_regions", "region_pixels", "weak_flux_factor",
-           "weak_flux_factor_difference"]
+__all__ = ["PAPER_BINS", "PIXEL_SCALE_OF_THE_PAPER", "QUIET_LIMIT", "FluxConservingCurve", "WeakFluxFactor",
+           "flux_conserving_fit", "gong_resolution", "paper_pixels", "paper_bins", "paper_regions",
+           "region_pixels", "weak_flux_factor", "weak_flux_factor_difference"]
 
 #: The authors' numbers of bins per viewing angle (deg): (quiet Sun, sunspot).
 PAPER_BINS = {0: (35, 21), 25: (21, 9), 45: (15, 7), 60: (9, 7), 70: (7, 7), 75: (7, 7)}
@@ -52,8 +62,12 @@ PAPER_BINS = {0: (35, 21), 25: (21, 9), 45: (15, 7), 60: (9, 7), 70: (7, 7), 75:
 #: Quiet-Sun pixels have |B_measured| below this times cos θ.
 QUIET_LIMIT = 400 * u.G
 
+#: GONG's pixel, in which the authors set the sunspot mask's dilation and this module its bootstrap blocks.
+PIXEL_SCALE_OF_THE_PAPER = 2.5 * u.arcsec
+
 _SPOT_DARKNESS = 0.92  # sunspot: continuum below this fraction of the quiet-Sun median
-_SPOT_DILATION = 7     # pixels: the sunspot mask is dilated by this square
+_SPOT_DILATION = 7     # GONG pixels: the sunspot mask is dilated by this square
+_BLOCK = 4             # GONG pixels (10″, about GONG's PSF width): the bootstrap blocks' side
 
 
 @dataclass(frozen=True)
@@ -236,9 +250,86 @@ def flux_conserving_fit(measured, truth, n_bins, *, min_outer=400, symmetric=Tru
                                counts=np.bincount(which, minlength=n_bins))
 
 
-def paper_regions(magnetogram, continuum, *, latitude=0 * u.deg, usable=None):
+def paper_pixels(gong_pixels, smap=None):
+    """
+    A length the authors gave in GONG pixels, in the pixels of another map.
+
+    Parameters
+    ----------
+    gong_pixels : int
+        Pixels of `PIXEL_SCALE_OF_THE_PAPER` (2.5″).
+    smap : `~sunpy.map.GenericMap`, optional
+        The map whose pixels to count in (its ``scale``); None or an array:
+        GONG's pixels.
+
+    Returns
+    -------
+    int
+        The same angle on the Sun in the map's pixels (nearest, at least 1).
+
+    Examples
+    --------
+    >>> import numpy as np, sunpy.map
+    >>> header = {"cdelt1": 0.504, "cdelt2": 0.504, "cunit1": "arcsec", "cunit2": "arcsec",
+    ...           "ctype1": "HPLN-TAN", "ctype2": "HPLT-TAN"}
+    >>> hmi_like = sunpy.map.Map(np.zeros((4, 4)), header)
+    >>> paper_pixels(7), paper_pixels(7, hmi_like), paper_pixels(4, hmi_like)
+    (7, 35, 20)
+    """
+    scale = getattr(smap, "scale", None)
+    if scale is None:
+        return int(gong_pixels)
+    pixel = u.Quantity(scale.axis1).to_value(u.arcsec / u.pix)
+    angle = gong_pixels * PIXEL_SCALE_OF_THE_PAPER.to_value(u.arcsec)
+    return max(1, int(round(angle / abs(pixel))))
+
+
+def gong_resolution():
+    """
+    The FWHM of GONG's view: seeing ⊗ the aperture's Airy core ⊗ the 2.5″ pixel, in quadrature.
+
+    The scale on which the authors' continuum threshold was set: 3.6″ seeing,
+    1.03 λ/D = 5.1″ for 2.8 cm at 676.8 nm, and the pixel's box (σ = 2.5″/√12).
+
+    Returns
+    -------
+    `~astropy.units.Quantity`
+        In arcsec (6.5″ for GONG's defaults).
+
+    Examples
+    --------
+    >>> print(f"{gong_resolution():.2f}")
+    6.50 arcsec
+    """
+    from gongsynth.instruments import get
+    gong = get("gong")
+    airy = (1.03 * gong.line_wavelength / gong.aperture * u.rad).to(u.arcsec)
+    pixel = gong.plate_scale / math.sqrt(12) * math.sqrt(8 * math.log(2))
+    return np.sqrt(gong.seeing_fwhm ** 2 + airy ** 2 + pixel ** 2).to(u.arcsec)
+
+
+def _at_gong_resolution(light, fill, smap):
+    """
+    The continuum as GONG would see it at the map's own pixels: unchanged for pixels of GONG's size or
+    larger, else smoothed by a Gaussian of `gong_resolution` (NaN filled with ``fill`` first).
+
+    Without it a finer map's intergranular lanes fall below the authors' threshold (15 % of HMI's
+    quiet pixels at 0.504″), and the 17.5″ dilation turns the whole field into "sunspot".
+    """
+    if paper_pixels(1, smap) <= 1:
+        return light
+    pixel = abs(u.Quantity(smap.scale.axis1).to_value(u.arcsec / u.pix))
+    sigma = gong_resolution().to_value(u.arcsec) / pixel / math.sqrt(8 * math.log(2))
+    return scipy.ndimage.gaussian_filter(np.where(np.isfinite(light), light, fill), sigma, mode="nearest")
+
+
+def paper_regions(magnetogram, continuum, *, latitude=0 * u.deg, usable=None, dilation=None):
     """
     The authors' quiet-Sun and sunspot pixels of a magnetogram.
+
+    The sunspot is where the continuum, seen at GONG's resolution, is darker
+    than 0.92 × the quiet-Sun median: a map with pixels finer than GONG's
+    (its ``scale``) has its continuum smoothed to `gong_resolution` first.
 
     Parameters
     ----------
@@ -250,6 +341,11 @@ def paper_regions(magnetogram, continuum, *, latitude=0 * u.deg, usable=None):
         Viewing angle θ (sets the quiet-Sun limit 400 G × cos θ).
     usable : array of bool, optional
         Pixels that may be used at all (e.g. the native-resolution part).
+    dilation : int, optional
+        Side in pixels of the square by which the dark pixels are dilated into
+        the sunspot mask.  Default: the authors' 7 GONG pixels (17.5″) in the
+        magnetogram's pixels when it is a map (`paper_pixels`: 35 for HMI's
+        0.504″), else 7.
 
     Returns
     -------
@@ -264,8 +360,12 @@ def paper_regions(magnetogram, continuum, *, latitude=0 * u.deg, usable=None):
         raise ValueError("no usable pixels (all NaN or masked)")
     limit = QUIET_LIMIT.to_value(u.G) * math.cos(u.Quantity(latitude, u.deg).to_value(u.rad))
     calm = usable & (np.abs(b) < limit)
-    dark = usable & (light < _SPOT_DARKNESS * np.median(light[calm if calm.any() else usable]))
-    sunspot = usable & scipy.ndimage.binary_dilation(dark, np.ones((_SPOT_DILATION, _SPOT_DILATION), bool))
+    reference = np.median(light[calm if calm.any() else usable])
+    dark = usable & (_at_gong_resolution(light, reference, magnetogram) < _SPOT_DARKNESS * reference)
+    side = paper_pixels(_SPOT_DILATION, magnetogram) if dilation is None else int(dilation)
+    if side < 1:
+        raise ValueError(f"dilation must be a positive number of pixels, got {dilation!r}")
+    sunspot = usable & scipy.ndimage.binary_dilation(dark, np.ones((side, side), bool))
     return calm & ~sunspot, sunspot
 
 
@@ -327,7 +427,7 @@ def paper_bins(latitude, region="quiet"):
     return PAPER_BINS[nearest][0 if region == "quiet" else 1]
 
 
-def weak_flux_factor(results, *, region="quiet", n_bins=None, min_outer=400, n_boot=50, block=4, seed=0,
+def weak_flux_factor(results, *, region="quiet", n_bins=None, min_outer=400, n_boot=50, block=None, seed=0,
                      psf=True):
     """
     The weak-flux calibration factor of a simulation, as papers II/III estimate it.
@@ -345,9 +445,10 @@ def weak_flux_factor(results, *, region="quiet", n_bins=None, min_outer=400, n_b
         Fewest pixels in each outer bin.
     n_boot : int
         Block-bootstrap resamples for the uncertainty.
-    block : int
-        Side of the bootstrap blocks in pixels (4 GONG pixels = 10″, about
-        the PSF's width, so blocks are roughly independent).
+    block : int, optional
+        Side of the bootstrap blocks in pixels.  Default 10″ in the run's
+        pixels (`paper_pixels`): 4 GONG pixels, about GONG's PSF width, so that
+        blocks are roughly independent; 20 HMI pixels, the same patch of Sun.
     seed : int
         Seed of the bootstrap.
     psf : bool
@@ -374,7 +475,7 @@ def weak_flux_factor(results, *, region="quiet", n_bins=None, min_outer=400, n_b
 
 
 def weak_flux_factor_difference(first, second, *, region="quiet", n_bins=None, min_outer=400, n_boot=50,
-                                block=4, seed=0, psf=True):
+                                block=None, seed=0, psf=True):
     """
     The change of the weak-flux factor between two sets of runs of the same field, with its uncertainty.
 
@@ -433,8 +534,9 @@ def _pooled(results, region, psf, block):
         m, t, rows, columns = region_pixels(result, region, psf=psf)
         measured.append(m)
         truth.append(t)
+        side = paper_pixels(_BLOCK, result.magnetogram) if block is None else int(block)
         # Bootstrap blocks never span two runs.
-        labels.append((number * 100_003 + rows // block) * 100_003 + columns // block)
+        labels.append((number * 100_003 + rows // side) * 100_003 + columns // side)
     return np.concatenate(measured), np.concatenate(truth), np.concatenate(labels), latitude
 
 

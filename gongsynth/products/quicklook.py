@@ -6,8 +6,9 @@ noise) and logarithmic beyond, up to the field that 99.9 % of the magnetogram's
 pixels stay under (at least GONG's ±150 G), so that spots and plage are not
 saturated; colour bars carry arrows where values lie beyond their range.  In
 a tiled scene each quadrant is labelled with its input magnification (1× is
-GONG's resolution), and a full-disk run on a detector smaller than the disk
-says what part of the disk it shows.
+the tile at its true size, seen at the instrument's own resolution), and a
+full-disk run on a detector smaller than the disk says what part of the disk
+it shows.
 """
 import astropy.units as u
 import numpy as np
@@ -157,7 +158,7 @@ def _sky_extent(smap):
 
 
 def _label_quadrants(ax, resolution_map, extent):
-    """Write each tiled region's input magnification (1× = GONG's resolution) at its centre."""
+    """Write each tiled region's input magnification (1× = the tile at its true size) at its centre."""
     levels = np.unique(resolution_map)
     if levels.size < 2:
         return
@@ -262,7 +263,7 @@ def quicklook_figure(result):
     if len(panels) < nrows * ncols:
         _histograms(fig.add_axes(_rect(fig, len(panels), ncols, nrows, _PLOT)), result)
     magnifications = np.unique(result.resolution_map)
-    note = (f"; input magnified {', '.join(f'{m:g}×' for m in magnifications)} by quadrant (1× = GONG)"
+    note = (f"; input magnified {', '.join(f'{m:g}×' for m in magnifications)} by quadrant (1× = true size)"
             if magnifications.size > 1 else "")
     head = result.summary().splitlines()
     fig.suptitle(f"{head[0]}\n{head[1].strip()}\n{_field_of_view(result)}{note}", fontsize=9)

@@ -17,9 +17,9 @@ from typing import ClassVar
 import astropy.constants as const
 import astropy.units as u
 
-from gongsynth.instruments.base import InstrumentParameters
-from gongsynth.instruments.base import plain_field as _plain
-from gongsynth.instruments.base import quantity_field as _param
+from gongsynth.instruments.parameters import InstrumentParameters, gauss_per_zeeman_velocity
+from gongsynth.instruments.parameters import plain_field as _plain
+from gongsynth.instruments.parameters import quantity_field as _param
 
 __all__ = ["GONGInstrument", "PREFILTER_FORMS", "resolve_instrument"]
 
@@ -300,13 +300,7 @@ class GONGInstrument(InstrumentParameters):
         `~astropy.units.Quantity`
             In G / (m / s); 0.7038 for g = 1.5 at 676.78 nm.
         """
-        m_e = const.m_e.cgs.value
-        c = const.c.cgs.value
-        e = const.e.gauss.value
-        lam = self.line_wavelength.to_value(u.cm)
-        g = self.lande_g.to_value(u.one)
-        per_cm_s = 4 * math.pi * m_e * c / (e * g * lam)
-        return (per_cm_s * 100) * u.G / (u.m / u.s)
+        return gauss_per_zeeman_velocity(self.line_wavelength, self.lande_g)
 
     # ------------------------------------------------------------ the protocol
     @property

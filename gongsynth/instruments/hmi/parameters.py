@@ -19,17 +19,15 @@ guide says why each was chosen.
 from __future__ import annotations
 
 import dataclasses
-import math
-import numbers
-import tomllib
-from dataclasses import dataclass, field, fields
-from pathlib import Path
+from dataclasses import dataclass
+from typing import ClassVar
 
 import astropy.constants as const
 import astropy.units as u
-import tomlkit
 
-from gongsynth.tomlfmt import toml_table
+from gongsynth.instruments.parameters import InstrumentParameters, field_unit, gauss_per_zeeman_velocity
+from gongsynth.instruments.parameters import plain_field as _plain
+from gongsynth.instruments.parameters import quantity_field as _param
 
 __all__ = ["HMIInstrument", "N_TUNINGS", "N_HMI_PLANES", "TUNING_INDICES", "resolve_hmi"]
 
@@ -41,25 +39,11 @@ N_HMI_PLANES = 2 * N_TUNINGS
 #: (+172 mÅ), I5 the bluest (HMI's numbering, Couvidat et al. 2016, Sec. 2).
 TUNING_INDICES = (2.5, 1.5, 0.5, -0.5, -1.5, -2.5)
 
-_UNIT = "unit"
-_DOC = "doc"
 _mA = u.Unit("mAA")  # milli-ångström, HMI's customary unit for tuning and widths
 
 
-# Local equivalents of gongsynth.instrument's private field helpers (kept local
-# so that this subpackage does not reach into another module's private names).
-def _param(default, unit, doc):
-    """A Quantity-valued dataclass field with its canonical unit and source."""
-    return field(default=u.Quantity(default, unit), metadata={_UNIT: u.Unit(unit), _DOC: doc})
-
-
-def _plain(default, kind, doc):
-    """A plain (int or str) dataclass field."""
-    return field(default=default, metadata={_UNIT: kind, _DOC: doc})
-
-
-@dataclass(frozen=True)
-class HMIInstrument:
+@dataclass(frozen=True, eq=False)
+class HMIInstrument(InstrumentParameters):
     """
     Every parameter of the simulated SDO/HMI (line-of-sight observables).
 
@@ -161,48 +145,32 @@ class HMIInstrument:
     lut_velocity_step: u.Quantity = _param(24.0, u.m / u.s, "look-up-table velocity step "
                                            "(HMI pipeline value)")
 
-    name = "hmi"
-    line = "Fe I 617.3"
+    #: The registry key (`gongsynth.instruments.get`) and the line (the radiative-transfer
+    #: line registry's key).
+    name: ClassVar[str] = "hmi"
+    line: ClassVar[str] = "Fe I 617.3"
     #: The name in metadata; the reduction algorithm (`gongsynth.instruments.hmi.observables.reduce_hmi`,
     #: imported by the reduction stage); the camera keeps every bit (no truncation, no dither).
-    label = "HMI"
-    algorithm = "gongsynth.instruments.hmi.observables:reduce_hmi"
+    label: ClassVar[str] = "HMI"
+    algorithm: ClassVar[str] = "gongsynth.instruments.hmi.observables:reduce_hmi"
     #: A run's length when none is given: one LOS sequence, the hmi.M_45s magnetogram
     #: (Schou et al. 2012, Sec. 4; the 720-s product is 16 sequences: 12 min).
-    default_duration = 45 * u.s
-    truncate_bits = 0
+    default_duration: ClassVar[u.Quantity] = 45 * u.s
+    truncate_bits: ClassVar[int] = 0
+    #: A tiled run's detector when none is given (chosen): 1024² of the 4096² CCD's pixels.
+    #: 1024 × 0.504″ = 516″ (374 Mm at disk centre): each quadrant of the tiled layout holds
+    #: about two copies of the default 98-Mm box at 1× and a quarter of it at 8×; the full
+    #: CCD would only repeat the box 16 times more at 16 times the optics, camera and
+    #: reduction cost (139 s and 9.5 GB for a 10-min run).
+    tiled_detector_shape: ClassVar[int] = 1024
 
     def __post_init__(self):
-        for f in fields(self):
-            kind = f.metadata[_UNIT]
-            value = getattr(self, f.name)
-            if kind is int:
-                if isinstance(value, numbers.Integral) and not isinstance(value, bool):
-                    object.__setattr__(self, f.name, int(value))
-                    value = int(value)
-                if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                    raise TypeError(f"HMIInstrument.{f.name} must be a positive int, got {value!r}")
-            else:
-                object.__setattr__(self, f.name, _as_quantity(f.name, value, kind))
-        for name in _NONNEGATIVE:
-            if getattr(self, name).value < 0:
-                raise ValueError(f"HMIInstrument.{name} must be >= 0, got {getattr(self, name)}")
-        for f in fields(self):
-            value = getattr(self, f.name)
-            if isinstance(value, u.Quantity) and f.name not in _NONNEGATIVE + ("nontunable_phase",) \
-                    and not value.value > 0:
-                raise ValueError(f"HMIInstrument.{f.name} must be > 0, got {value}")
-        for name in _FRACTIONS:
-            if getattr(self, name).to_value(u.one) > 1:
-                raise ValueError(f"HMIInstrument.{name} must lie in (0, 1], got {getattr(self, name)}")
-        if self.quadrature_step >= self.integration_half_width:
-            raise ValueError(f"HMIInstrument.quadrature_step ({self.quadrature_step}) must be smaller "
-                             f"than integration_half_width ({self.integration_half_width})")
-        if self.lut_velocity_step >= self.lut_velocity_max:
-            raise ValueError(f"HMIInstrument.lut_velocity_step ({self.lut_velocity_step}) must be "
-                             f"smaller than lut_velocity_max ({self.lut_velocity_max})")
-        if self.adc_bits > 31:
-            raise ValueError(f"HMIInstrument.adc_bits must be at most 31, got {self.adc_bits}")
+        super().__post_init__()
+        for smaller, larger in (("quadrature_step", "integration_half_width"),
+                                ("lut_velocity_step", "lut_velocity_max")):
+            if getattr(self, smaller) >= getattr(self, larger):
+                raise ValueError(f"HMIInstrument.{smaller} ({getattr(self, smaller)}) must be smaller "
+                                 f"than {larger} ({getattr(self, larger)})")
 
     # ------------------------------------------------------------------ derived
     @property
@@ -252,12 +220,7 @@ class HMIInstrument:
         `~astropy.units.Quantity`
             In G / (m / s); 0.2314 for g = 2.5 at 617.33 nm.
         """
-        m_e = const.m_e.cgs.value
-        c = const.c.cgs.value
-        e = const.e.gauss.value
-        lam = self.line_wavelength.to_value(u.cm)
-        per_cm_s = 4 * math.pi * m_e * c / (2 * e * self.lande_g.to_value(u.one) * lam)
-        return (per_cm_s * 100) * u.G / (u.m / u.s)
+        return gauss_per_zeeman_velocity(self.line_wavelength, self.lande_g) / 2
 
     @property
     def velocity_per_wavelength(self):
@@ -322,181 +285,6 @@ class HMIInstrument:
                 "kmag": (self.gauss_per_velocity.to_value(u.G / (u.m / u.s)),
                          "[G/(m/s)] B = (v_LCP - v_RCP) K_m")}
 
-    # --------------------------------------------------------------- utilities
-    @classmethod
-    def source(cls, name):
-        """
-        The documented source of a parameter.
-
-        Examples
-        --------
-        >>> HMIInstrument.source("plate_scale")
-        'pixel on the sky (Schou et al. 2012)'
-        """
-        for f in fields(cls):
-            if f.name == name:
-                return f.metadata[_DOC]
-        raise KeyError(f"HMIInstrument has no parameter {name!r}")
-
-    def replace(self, **changes):
-        """
-        Return a copy with some parameters changed.
-
-        Parameters
-        ----------
-        **changes
-            Field names and their new values.
-
-        Returns
-        -------
-        `HMIInstrument`
-        """
-        unknown = set(changes) - {f.name for f in fields(self)}
-        if unknown:
-            raise TypeError(f"HMIInstrument has no parameter(s) {sorted(unknown)}")
-        return dataclasses.replace(self, **changes)
-
-    def __eq__(self, other):
-        if not isinstance(other, HMIInstrument):
-            return NotImplemented
-        return self._key() == other._key()
-
-    def __hash__(self):
-        return hash(self._key())
-
-    def _key(self):
-        """A hashable tuple of (name, value, unit string) for every field."""
-        key = []
-        for f in fields(self):
-            value = getattr(self, f.name)
-            if isinstance(value, u.Quantity):
-                key.append((f.name, float(value.value), value.unit.to_string()))
-            else:
-                key.append((f.name, value))
-        return tuple(key)
-
-    def to_dict(self):
-        """
-        Every parameter as a TOML-ready value (Quantities as strings such as ``"0.504 arcsec"``).
-
-        Returns
-        -------
-        dict
-        """
-        out = {}
-        for f in fields(self):
-            value = getattr(self, f.name)
-            if isinstance(value, u.Quantity) and value.unit == u.one:
-                out[f.name] = float(value.value)
-            elif isinstance(value, u.Quantity):
-                out[f.name] = f"{float(value.value)!r} {value.unit.to_string()}"
-            else:
-                out[f.name] = value
-        return out
-
-    @classmethod
-    def from_dict(cls, mapping, *, where="instrument"):
-        """
-        Build an instrument from a mapping such as a parsed TOML table.
-
-        Parameters
-        ----------
-        mapping : dict
-            Parameter names to values (Quantities, strings like ``"0.504 arcsec"``,
-            numbers for dimensionless parameters, ints).  A ``name`` key, if
-            present, must be ``"hmi"``.
-        where : str
-            Name of the table, used in error messages.
-
-        Returns
-        -------
-        `HMIInstrument`
-
-        Raises
-        ------
-        KeyError
-            If a key is not a parameter of the instrument.
-        ValueError
-            If ``name`` is not ``"hmi"`` or a value is not a quantity.
-        """
-        mapping = dict(mapping)
-        name = mapping.pop("name", cls.name)
-        if name != cls.name:
-            raise ValueError(f"[{where}] name = {name!r} is not {cls.name!r}")
-        known = {f.name: f for f in fields(cls)}
-        unknown = [k for k in mapping if k not in known]
-        if unknown:
-            raise KeyError(f"unknown key(s) {unknown} in [{where}]; valid keys are {sorted(known)}")
-        kwargs = {}
-        for key, value in mapping.items():
-            kind = known[key].metadata[_UNIT]
-            if isinstance(kind, u.UnitBase) and isinstance(value, str):
-                try:
-                    value = u.Quantity(value)
-                except (TypeError, ValueError) as exc:
-                    raise ValueError(
-                        f"[{where}] {key} = {value!r} is not a quantity such as '1.0 {kind}'"
-                    ) from exc
-            kwargs[key] = value
-        return cls(**kwargs)
-
-    def toml_table(self, *, comments=True):
-        """
-        The instrument as a tomlkit ``[instrument]`` table (``name = "hmi"`` first).
-
-        Parameters
-        ----------
-        comments : bool
-            Write each parameter's source as a comment.
-
-        Returns
-        -------
-        `tomlkit.items.Table`
-        """
-        values = self.to_dict()
-        rows = [("name", self.name, "instrument of the family")]
-        rows += [(f.name, values[f.name], f.metadata[_DOC]) for f in fields(self)]
-        return toml_table(rows, comments=comments)
-
-    def to_toml(self):
-        """
-        The instrument as a TOML ``[instrument]`` table.
-
-        Returns
-        -------
-        str
-        """
-        doc = tomlkit.document()
-        doc.add("instrument", self.toml_table())
-        return tomlkit.dumps(doc)
-
-    @classmethod
-    def from_toml(cls, source):
-        """
-        Read an instrument from TOML text or a path to a TOML file.
-
-        Parameters
-        ----------
-        source : str or `pathlib.Path`
-            TOML text (parameters at top level or in ``[instrument]``) or a path.
-
-        Returns
-        -------
-        `HMIInstrument`
-        """
-        if isinstance(source, Path) or (isinstance(source, str) and source.endswith(".toml")
-                                        and "\n" not in source):
-            text = Path(source).read_text()
-        else:
-            text = source
-        table = tomllib.loads(text)
-        if "instrument" in table:
-            extra = [k for k in table if k != "instrument"]
-            if extra:
-                raise KeyError(f"unknown top-level key(s) {extra} next to [instrument]")
-            table = table["instrument"]
-        return cls.from_dict(table)
-
 
 def resolve_hmi(instrument):
     """
@@ -522,22 +310,18 @@ def resolve_hmi(instrument):
     return instrument
 
 
-_NONNEGATIVE = ("seeing_fwhm", "read_noise")
-_FRACTIONS = ("nb_contrast", "wb_contrast", "e1_contrast", "e2_contrast", "e3_contrast", "e4_contrast",
-              "e5_contrast", "front_window_peak", "blocker_peak", "quantum_efficiency",
-              "reference_line_depth")
+#: Allowed range of each numeric field in its canonical unit ("[" and "]" inclusive);
+#: ``nontunable_phase`` may take any value.
+_RANGES = {
+    **{f.name: "(0, inf)" for f in dataclasses.fields(HMIInstrument)
+       if isinstance(field_unit(HMIInstrument, f.name), u.UnitBase)},
+    **dict.fromkeys(("seeing_fwhm", "read_noise"), "[0, inf)"),
+    **dict.fromkeys(("nb_contrast", "wb_contrast", "e1_contrast", "e2_contrast", "e3_contrast",
+                     "e4_contrast", "e5_contrast", "front_window_peak", "blocker_peak",
+                     "quantum_efficiency", "reference_line_depth"), "(0, 1]"),
+    **dict.fromkeys(("detector_shape", "supersampling"), "[1, inf)"),
+    "adc_bits": "[1, 31]",
+}
+del _RANGES["nontunable_phase"]
 
-
-def _as_quantity(name, value, unit):
-    """Check that ``value`` is a finite scalar Quantity in ``unit`` (a number if dimensionless)."""
-    if not isinstance(value, u.Quantity):
-        if unit == u.one and isinstance(value, (int, float)) and not isinstance(value, bool):
-            return u.Quantity(float(value))
-        raise TypeError(f"HMIInstrument.{name} must be an astropy Quantity in units of {unit} "
-                        f"(e.g. {name}=1.0 * u.Unit('{unit}')), got {value!r}")
-    if not value.unit.is_equivalent(unit):
-        raise u.UnitsError(f"HMIInstrument.{name} must have units convertible to '{unit}', "
-                           f"got '{value.unit}'")
-    if value.ndim != 0 or not math.isfinite(float(value.value)):
-        raise ValueError(f"HMIInstrument.{name} must be a finite scalar, got {value!r}")
-    return value
+HMIInstrument.RANGES = _RANGES

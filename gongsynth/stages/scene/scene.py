@@ -255,7 +255,7 @@ class Scene:
 
     def resolution_map(self, instrument=None):
         """
-        Magnification of the input at each detector pixel (1 = GONG resolution).
+        Magnification of the input at each detector pixel (1 = the true size: the instrument's resolution).
 
         Parameters
         ----------
