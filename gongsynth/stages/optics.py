@@ -319,8 +319,8 @@ def _band_limited(band_limited, psf, inst):
     above it is tolerated: GONG's D/λ0 = 0.2006 cycles per arcsec against
     0.2, where the Airy OTF is ~1e-4).
     """
-    if not band_limited or not (psf is None or psf is True):
-        return False
+    if not band_limited or not (psf is None or psf is True) or getattr(inst, "psf_model", None) is not None:
+        return False  # a user kernel, or an instrument's measured PSF: not band limited by construction
     cutoff = (inst.aperture / inst.line_wavelength).to_value(u.one) * u.arcsec.to(u.rad)
     return cutoff <= 1.005 / (2 * inst.plate_scale.to_value(u.arcsec))
 

@@ -132,7 +132,8 @@ class HMIInstrument:
     detector_shape: int = _plain(4096, int, "CCD side in pixels (Schou et al. 2012)")
     supersampling: int = _plain(2, int, "resampling factor before binning (chosen: PSF Nyquist-sampled)")
     seeing_fwhm: u.Quantity = _param(0.0, u.arcsec, "no seeing: SDO is in space")
-    psf_radius: u.Quantity = _param(20.0, u.arcsec, "PSF kernel truncation radius (chosen: 22 lambda/D)")
+    psf_radius: u.Quantity = _param(60.0, u.arcsec, "PSF kernel truncation radius (chosen: 0.5 % of the "
+                                    "Wachter et al. 2012 PSF's light lies beyond)")
     effective_area: u.Quantity = _param(3.29, u.cm**2, "effective area incl. analyser and CCD QE, "
                                         "derived from the counts (gongsynth.instruments.hmi.noise)")
     quantum_efficiency: u.Quantity = _param(1.0, u.one, "CCD QE, folded into effective_area (chosen)")
@@ -168,6 +169,8 @@ class HMIInstrument:
     label = "HMI"
     algorithm = "gongsynth.instruments.hmi.observables:reduce_hmi"
     truncate_bits = 0
+    #: The PSF: Wachter et al. (2012)'s measured core and scattered-light wings (`gongsynth.instruments.hmi.psf`).
+    psf_model = "gongsynth.instruments.hmi.psf:psf_profile"
 
     def __post_init__(self):
         for f in fields(self):
