@@ -14,7 +14,7 @@ from gongsynth.sun.photosphere.line import NECKEL_LABS_617
 
 HMI = instruments.get("hmi")
 GONG = instruments.get("gong")
-TINY = dict(shape=(16, 16), pixel_size=6 * u.Mm, seeds_per_level=(1, 1, 1, 1), theta=(0, 45, 85))
+TINY = dict(shape=(12, 12), pixel_size=3 * u.Mm, seeds_per_level=(1, 1, 1, 1), theta=(0, 60))
 
 
 @pytest.fixture(scope="module")
@@ -40,8 +40,7 @@ def test_the_hmi_library_is_synthesised_in_fe_i(hmi_library):
     """The Milne-Eddington description of Fe I 617.3, its limb darkening, HMI's 12 planes."""
     assert hmi_library.line == me_line("Fe I 617.3") and hmi_library.line.limb_darkening == NECKEL_LABS_617
     assert hmi_library.basis.amplitudes.shape[1] == 6        # six tunings per polarisation
-    gong = build_library(instrument=GONG, **TINY)
-    assert gong.line == NiLine()
+    assert me_line(GONG.line) == NiLine()      # GONG's library keeps Ni I (its default line)
     light, truth = library_scene(hmi_library, instrument=HMI.replace(plate_scale=40 * u.arcsec),
                                  detector_shape=64, supersampling=1)
     data = light.data.value
