@@ -1,5 +1,5 @@
 """
-Validation of HMI's PSF (`gongsynth.instruments.hmi.psf`): encircled energy and the scattered light beyond the limb.
+Validation of HMI's PSF (`gongsynth.instruments.hmi.psf`): encircled energy, scattered light off the limb.
 
 1. The fraction of a point source's light beyond 1, 2, 5, 10, 20, 60 and 100″ of the Wachter et
    al. (2012) PSF, analytic (`encircled_energy`) and from the sampled kernel the optics use
@@ -35,7 +35,8 @@ def line_spread(inst, truncation):
     """LSF(x) = ∫ PSF(√(x² + y²)) dy within the truncation radius, normalised to unit integral."""
     x = np.arange(0, truncation + 0.05, 0.05)
     lsf = np.array([2 * scipy.integrate.quad(lambda y, a=a: psf_profile(np.hypot(a, y), inst), 0,
-                                             np.sqrt(max(truncation**2 - a * a, 0)), limit=400)[0] for a in x])
+                                             np.sqrt(max(truncation**2 - a * a, 0)), limit=400)[0]
+                    for a in x])
     total = 2 * np.trapezoid(lsf, x)
     return x, lsf / total
 
@@ -47,10 +48,12 @@ def main():
     half = kernel.shape[0] // 2
     yy, xx = np.indices(kernel.shape) - half
     r = np.hypot(yy, xx) * scale
-    print(f"HMI PSF (Wachter et al. 2012), kernel {kernel.shape[0]}² of {scale}″ (psf_radius {hmi.psf_radius})")
+    print(f"HMI PSF (Wachter et al. 2012), kernel {kernel.shape[0]}² of {scale}″ "
+          f"(psf_radius {hmi.psf_radius})")
     print("  radius   beyond (analytic)   beyond (sampled kernel)")
     for radius in (1, 2, 5, 10, 20, 60, 100):
-        print(f"  {radius:5.0f}″   {1 - encircled_energy(radius, hmi):8.4f}            {kernel[r > radius].sum():8.4f}")
+        beyond = 1 - encircled_energy(radius, hmi)
+        print(f"  {radius:5.0f}″   {beyond:8.4f}            {kernel[r > radius].sum():8.4f}")
 
     # A strip across the west limb: 1024 x 2048 samples (258″ by 516″), the limb at 3/4 of the width.
     ny, nx = 1024, 2048

@@ -36,6 +36,7 @@ SIDE = 1024
 
 
 def real_map():
+    """The real HMI cut-out, in G."""
     from astropy.io import fits
 
     with fits.open(REAL) as hdul:
@@ -75,7 +76,8 @@ def quiet_box(data):
                 best = (box.std(), y, x)
     _, y, x = best
     box = data[y:y + BOX, x:x + BOX]
-    return {"box_origin": [y, x], "std_G": float(box.std()), "robust_sigma_G": float(robust_sigma(box.ravel())),
+    return {"box_origin": [y, x], "std_G": float(box.std()),
+            "robust_sigma_G": float(robust_sigma(box.ravel())),
             "pixel_difference_G": float(pixel_difference_sigma(box))}
 
 
@@ -96,6 +98,7 @@ def power_spectrum(data, pixel_mm, bins=48):
 
 
 def summary(data, pixel_mm):
+    """The statistics of one map."""
     finite = data[np.isfinite(data)]
     k, p = power_spectrum(data, pixel_mm)
     hist, edges = np.histogram(finite, bins=np.arange(-300, 305, 5))
@@ -108,12 +111,14 @@ def summary(data, pixel_mm):
 
 
 def figure(sim, real, numbers, path):
+    """Both maps, their histograms and power spectra."""
     import matplotlib
     matplotlib.use("agg")
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(1, 4, figsize=(20, 5))
-    for ax, data, name in ((axes[0], sim, "simulated HMI (gongsynth)"), (axes[1], real, "real HMI 2010-10-20")):
+    for ax, data, name in ((axes[0], sim, "simulated HMI (gongsynth)"),
+                           (axes[1], real, "real HMI 2010-10-20")):
         im = ax.imshow(data, origin="lower", cmap="gray", vmin=-100, vmax=100)
         ax.set_title(f"{name}: central 1024²")
         fig.colorbar(im, ax=ax, label="B_LOS [G]")
@@ -131,6 +136,7 @@ def figure(sim, real, numbers, path):
 
 
 def main():
+    """Command line."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
     parser.add_argument("--simulated", help="folder of a saved full-disk HMI run (default: run one)")
     parser.add_argument("--seed", type=int, default=1)
@@ -148,7 +154,8 @@ def main():
     for key in ("simulated", "real"):
         n = numbers[key]
         q = n["quiet_box"]
-        print(f"{key:9s} pixel {n['pixel_Mm'] * 1000:.0f} km  mean {n['mean_G']:+.2f} G  std {n['std_G']:.1f} G  "
+        print(f"{key:9s} pixel {n['pixel_Mm'] * 1000:.0f} km  mean {n['mean_G']:+.2f} G  "
+              f"std {n['std_G']:.1f} G  "
               f"<|B|> {n['mean_abs_G']:.1f} G  p1/p99 {n['p1_p99_G'][0]:.1f}/{n['p1_p99_G'][1]:.1f} G  "
               f"|B|>50 G {100 * n['fraction_above_50G']:.2f} %  quiet box std {q['std_G']:.1f} G, "
               f"robust {q['robust_sigma_G']:.1f} G, pixel-difference {q['pixel_difference_G']:.1f} G")

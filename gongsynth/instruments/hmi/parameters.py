@@ -169,7 +169,8 @@ class HMIInstrument:
     label = "HMI"
     algorithm = "gongsynth.instruments.hmi.observables:reduce_hmi"
     truncate_bits = 0
-    #: The PSF: Wachter et al. (2012)'s measured core and scattered-light wings (`gongsynth.instruments.hmi.psf`).
+    #: The PSF: Wachter et al. (2012)'s measured core and scattered-light wings
+    #: (`gongsynth.instruments.hmi.psf`).
     psf_model = "gongsynth.instruments.hmi.psf:psf_profile"
 
     def __post_init__(self):

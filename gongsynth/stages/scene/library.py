@@ -373,7 +373,8 @@ def cache_directory():
 #: is part of the key, so that one instrument's library is never taken for another's; a parameter a
 #: new instrument adds is in the key until it is listed here (a rebuild, never a wrong reuse).
 _NOT_IN_KEY = frozenset((
-    "aperture", "plate_scale", "detector_shape", "supersampling", "seeing_fwhm", "psf_radius", "effective_area",
+    "aperture", "plate_scale", "detector_shape", "supersampling", "seeing_fwhm", "psf_radius",
+    "effective_area",
     "quantum_efficiency", "gain", "read_noise", "full_well", "adc_bits", "exposure_time", "frame_rate",
     "frame_interval", "waveplate_rate", "lcvr_period", "sequence_cadence", "vector_cycle", "vector_window",
     "vector_cadence", "dither_start", "dither_step", "dither_interval", "dither_cycle", "truncate_bits", "v0",

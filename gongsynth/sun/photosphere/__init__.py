@@ -19,5 +19,6 @@ from gongsynth.sun.photosphere.synthesis import (
     zeeman_splitting,
 )
 
-__all__ = ["Photosphere", "NiLine", "ME_LINES", "me_line", "model_photosphere", "synthesize", "DeferredStokes", "default_wavelength",
+__all__ = ["Photosphere", "NiLine", "ME_LINES", "me_line",
+           "model_photosphere", "synthesize", "DeferredStokes", "default_wavelength",
            "zeeman_splitting"]

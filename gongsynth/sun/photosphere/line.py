@@ -15,7 +15,8 @@ import numpy as np
 
 from gongsynth.validation import check_quantity
 
-__all__ = ["NiLine", "NECKEL_LABS_676", "NECKEL_LABS_617", "FE_I_6173_ME", "ME_LINES", "me_line"]
+__all__ = ["NiLine", "NECKEL_LABS_676", "NECKEL_LABS_617", "FE_I_6173_ME", "ME_LINES",
+           "me_line"]
 
 #: Neckel & Labs (1994, Sol. Phys. 153, 91) limb-darkening polynomial
 #: I(μ)/I(1) = Σ a_k μ^k at 676.78 nm: their Table coefficients at 669.400 and
@@ -149,15 +150,17 @@ class NiLine:
 #: Milne–Eddington description of the solar Fe I 617.33 nm line (HMI's), tuned as `NiLine` is: β = 4
 #: and the damping kept, Δλ_D and η0 fitted so that the spatial mean of the built-in photosphere at disk
 #: centre (`model_photosphere`, 256² columns of 96 km, seed 0, no spot) has the observed disk-centre
-#: central depth 0.62 and FWHM 10.2 pm (fit: Δλ_D = 3.29 pm ≈ 1.60 km/s, η0 = 5.47) (Kitt Peak FTS atlas as quoted by Norton et al. 2006,
-#: Sol. Phys. 239, 69, the numbers ``tests/test_rt_lines.py`` holds the radiative transfer to); the
+#: central depth 0.62 and FWHM 10.2 pm (Kitt Peak FTS atlas as quoted by Norton et al. 2006, Sol. Phys.
+#: 239, 69, the numbers ``tests/test_rt_lines.py`` holds the radiative transfer to): Δλ_D = 3.29 pm
+#: (≈ 1.60 km/s) and η0 = 5.47 (least squares, ``tests/test_hmi_fulldisk.py`` checks them); the
 #: same patch gives Ni I (`NiLine`) 0.61 and 9.8 pm against its 0.60 and 10.0 pm.  Continuum
 #: 3.2e14 erg s⁻¹ cm⁻² sr⁻¹ cm⁻¹ near 617.3 nm (Neckel & Labs 1984, the value of
 #: `gongsynth.instruments.hmi.noise.CONTINUUM_INTENSITY`), limb darkening `NECKEL_LABS_617`.  The
 #: Landé factor is the instrument's (``lande_g = None``): HMI's 2.5 is the line's own (J = 1 → 0,
 #: Norton et al. 2006).
 FE_I_6173_ME = NiLine(doppler_width=3.29 * u.pm, line_strength=5.47,
-                      continuum_intensity=3.2e14 * u.Unit("erg / (s cm2 sr cm)"), limb_darkening=NECKEL_LABS_617)
+                      continuum_intensity=3.2e14 * u.Unit("erg / (s cm2 sr cm)"),
+                      limb_darkening=NECKEL_LABS_617)
 
 #: The Milne–Eddington description of each line of `gongsynth.sun.rt.LINES`, by name.
 ME_LINES = {"Ni I 676.8": NiLine(), "Fe I 617.3": FE_I_6173_ME}
