@@ -482,8 +482,14 @@ def expected_counts(scene, instrument=None, *, psf=True, seeing=True, workers=No
 
 
 def _counts(planes, inst, dtype):
-    """Detector-pixel radiances (a Quantity) to expected electrons per frame."""
-    counts = (planes * photometric_factor(inst)).to(u.electron)
+    """Detector-pixel radiances (a Quantity, a fresh array: scaled in place) to expected electrons per frame."""
+    factor = photometric_factor(inst)
+    values = planes.value
+    values *= factor.value          # in place: a full-disk HMI stack is 1.6 GB
+    scale = (planes.unit * factor.unit).to(u.electron)
+    if scale != 1:
+        values *= scale
+    counts = u.Quantity(values, u.electron, copy=False)
     # FFT convolution leaves round-off of either sign (~1e-16 of the peak, ~3e-7 for
     # float32 planes) where the scene is dark (beyond the limb); counts cannot be
     # negative, so those are zeroed.  Anything larger would be a real error and is left to fail.
