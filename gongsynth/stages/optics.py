@@ -482,7 +482,7 @@ def expected_counts(scene, instrument=None, *, psf=True, seeing=True, workers=No
 
 
 def _counts(planes, inst, dtype):
-    """Detector-pixel radiances (a Quantity, a fresh array: scaled in place) to expected electrons per frame."""
+    """Detector-pixel radiances (a Quantity of a fresh array: scaled in place) to electrons per frame."""
     factor = photometric_factor(inst)
     values = planes.value
     values *= factor.value          # in place: a full-disk HMI stack is 1.6 GB
