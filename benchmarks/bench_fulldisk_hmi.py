@@ -19,7 +19,7 @@ import tempfile
 import textwrap
 
 CODE = textwrap.dedent("""
-    import json, logging, sys, threading, time
+    import json, sys, threading, time
     start = time.perf_counter()
     import astropy.units as u, gongsynth
     stage, peak = ["import"], {}
@@ -30,14 +30,14 @@ CODE = textwrap.dedent("""
             peak[stage[0]] = max(peak.get(stage[0], 0.0), rss)
             time.sleep(0.2)
 
-    class Stages(logging.Handler):
-        def emit(self, record):
-            message = record.getMessage()
-            if message.startswith("gongsynth: stage "):
-                stage[0] = message.split(": ")[1].split()[-1]
+    import gongsynth.chain
+    run_stage = gongsynth.chain.Stage.__call__
 
-    logging.getLogger("gongsynth").addHandler(Stages())
-    logging.getLogger("gongsynth").setLevel(logging.INFO)
+    def named(self, state):     # the stage now running, for the sampler
+        stage[0] = self.name
+        return run_stage(self, state)
+
+    gongsynth.chain.Stage.__call__ = named
     threading.Thread(target=watch, daemon=True).start()
     cpu = time.process_time()
     result = gongsynth.simulate(instrument="hmi", mode="full-disk", duration=0.75 * u.min, seed=1,
