@@ -494,7 +494,8 @@ class SimulationConfig:
     @property
     def network_on(self):
         """Whether a full-disk run lays the supergranular network: ``network``, or by default
-        on unless the surface field is an observed map (bool)."""
+        on unless the surface field is an observed map (bool).
+        """
         if self.network is not None:
             return self.network
         return self.surface_field is None or self.surface_field in SURFACE_FIELD_NAMES

@@ -319,8 +319,8 @@ def _band_limited(band_limited, psf, inst):
     above it is tolerated: GONG's D/λ0 = 0.2006 cycles per arcsec against
     0.2, where the Airy OTF is ~1e-4).
     """
-    if not band_limited or not (psf is None or psf is True):
-        return False
+    if not band_limited or not (psf is None or psf is True) or getattr(inst, "psf_model", None) is not None:
+        return False  # a user kernel, or an instrument's measured PSF: not band limited by construction
     cutoff = (inst.aperture / inst.line_wavelength).to_value(u.one) * u.arcsec.to(u.rad)
     return cutoff <= 1.005 / (2 * inst.plate_scale.to_value(u.arcsec))
 
@@ -482,8 +482,14 @@ def expected_counts(scene, instrument=None, *, psf=True, seeing=True, workers=No
 
 
 def _counts(planes, inst, dtype):
-    """Detector-pixel radiances (a Quantity) to expected electrons per frame."""
-    counts = (planes * photometric_factor(inst)).to(u.electron)
+    """Detector-pixel radiances (a Quantity of a fresh array: scaled in place) to electrons per frame."""
+    factor = photometric_factor(inst)
+    values = planes.value
+    values *= factor.value          # in place: a full-disk HMI stack is 1.6 GB
+    scale = (planes.unit * factor.unit).to(u.electron)
+    if scale != 1:
+        values *= scale
+    counts = u.Quantity(values, u.electron, copy=False)
     # FFT convolution leaves round-off of either sign (~1e-16 of the peak, ~3e-7 for
     # float32 planes) where the scene is dark (beyond the limb); counts cannot be
     # negative, so those are zeroed.  Anything larger would be a real error and is left to fail.

@@ -21,11 +21,18 @@ band limited, point samples on any grid finer than :math:`\lambda_0/(2D)
 unit sum (the Airy wings, ∝ r⁻³, put about 1 % of the energy beyond 100″:
 the default kernel is truncated there, the instrument's ``psf_radius``).
 
+An instrument may bring its own measured profile instead (``psf_model``,
+``"module:function"`` of ``f(radius_arcsec, instrument)`` with unit integral
+over the plane: HMI's Gaussian core and scattered-light wings,
+`gongsynth.instruments.hmi.psf`); it is sampled, truncated at ``psf_radius``
+and normalised the same way.
+
 ``seeing=False`` gives the diffraction-limited PSF (the Airy pattern alone,
 FWHM 1.029 λ0/D ≈ 5.13″), as an instrument with ``seeing_fwhm = 0``.
 The imaging operators that use these kernels are in `gongsynth.stages.optics`.
 """
 import functools
+import importlib
 import math
 import os
 
@@ -86,8 +93,20 @@ def _hankel_nodes():
     return 0.5 * (x[order] + 1), 0.5 * w[order]
 
 
+def _instrument_model(inst):
+    """The instrument's own PSF profile (``psf_model = "module:function"``), or None: Airy ⊗ seeing."""
+    target = getattr(inst, "psf_model", None)
+    if target is None:
+        return None
+    module, _, name = target.partition(":")
+    return getattr(importlib.import_module(module), name)
+
+
 def _profile(radius, inst):
     """PSF(r) per arcsec² for radii in arcsec (ndarray, any shape)."""
+    model = _instrument_model(inst)
+    if model is not None:
+        return model(np.asarray(radius, dtype=float), inst)
     nu_c = _cutoff_per_arcsec(inst)
     sigma = _seeing_sigma(inst)
     s, w = _hankel_nodes()

@@ -116,7 +116,8 @@ class HMIInstrument(InstrumentParameters):
     detector_shape: int = _plain(4096, int, "CCD side in pixels (Schou et al. 2012)")
     supersampling: int = _plain(2, int, "resampling factor before binning (chosen: PSF Nyquist-sampled)")
     seeing_fwhm: u.Quantity = _param(0.0, u.arcsec, "no seeing: SDO is in space")
-    psf_radius: u.Quantity = _param(20.0, u.arcsec, "PSF kernel truncation radius (chosen: 22 lambda/D)")
+    psf_radius: u.Quantity = _param(60.0, u.arcsec, "PSF kernel truncation radius (chosen: 0.5 % of the "
+                                    "Wachter et al. 2012 PSF's light lies beyond)")
     effective_area: u.Quantity = _param(3.29, u.cm**2, "effective area incl. analyser and CCD QE, "
                                         "derived from the counts (gongsynth.instruments.hmi.noise)")
     quantum_efficiency: u.Quantity = _param(1.0, u.one, "CCD QE, folded into effective_area (chosen)")
@@ -163,6 +164,9 @@ class HMIInstrument(InstrumentParameters):
     #: CCD would only repeat the box 16 times more at 16 times the optics, camera and
     #: reduction cost (139 s and 9.5 GB for a 10-min run).
     tiled_detector_shape: ClassVar[int] = 1024
+    #: The PSF: Wachter et al. (2012)'s measured core and scattered-light wings
+    #: (`gongsynth.instruments.hmi.psf`).
+    psf_model: ClassVar[str] = "gongsynth.instruments.hmi.psf:psf_profile"
 
     def __post_init__(self):
         super().__post_init__()

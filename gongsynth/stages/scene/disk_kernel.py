@@ -106,14 +106,18 @@ def render_disk(light, truth, h, x0, y0, distance, b0, radius,
                 cell_km, cells, cell_j0, cell_i0, seed, theta, ld_coeff,
                 level_net, level_first, level_count, level_uniform,
                 patches, uniform, pixel_km, mirror_ok, n_e, e_index, v_sign,
-                amplitudes, totals, v_first, v_step, to_earth):
+                amplitudes, totals, v_first, v_step, to_earth, plane0=0):
     """
-    Fill the light (6, NY, NX) and truth (NY, NX) of a full-disk grid from the library.
+    Fill the light (2C, NY, NX), or some of its planes, and truth (NY, NX) of a full disk from the library.
+
+    C is the instrument's filtergrams per analyser state (GONG's 3 channels, HMI's 6 tunings): plane
+    ``pol * C + c``, the layout of every instrument's ``analysers``.
 
     Parameters
     ----------
     light, truth : `numpy.ndarray`
-        float32 (6, NY, NX) and (NY, NX) outputs (zero beyond the limb), written in place.
+        float32 (n, NY, NX) and (NY, NX) outputs (zero beyond the limb), written in place: light
+        holds planes ``plane0 .. plane0 + n - 1`` (all 2C by default).
     h : float
         Grid spacing (rad).
     x0, y0 : float
@@ -149,11 +153,13 @@ def render_disk(light, truth, h, x0, y0, distance, b0, radius,
     e_index, v_sign : `numpy.ndarray`
         Analyser layout (`gongsynth.stages.scene.library.PatchLibrary`), int64 and float64 (2,).
     amplitudes, totals : `numpy.ndarray`
-        The Doppler basis tables, float64 (velocity, 3, J) and (velocity, 3), at velocities
+        The Doppler basis tables, float64 (velocity, C, J) and (velocity, C), at velocities
         ``v_first + k v_step``.
     v_first, v_step : float
     to_earth : float
         Radiance at the Sun to radiance at Earth per arcsec².
+    plane0 : int
+        The first plane ``light`` holds (a group of planes at a time bounds the memory of a large grid).
 
     Returns
     -------
@@ -169,14 +175,15 @@ def render_disk(light, truth, h, x0, y0, distance, b0, radius,
     v_off = n_e * j1
     b_off = (n_e + 1) * j1
     n_levels = level_net.size
-    n_v = totals.shape[0]
+    n_v, n_c = totals.shape
+    n_out = light.shape[0]
     size_y, size_x = ny * pixel_km, nx * pixel_km
     cb, sb = math.cos(b0), math.sin(b0)
     counts = np.zeros((big_y, 2), dtype=np.int64)
     for row in nb.prange(big_y):
         acc = np.empty(k_row)
-        amp = np.empty((3, j))
-        tot = np.empty(3)
+        amp = np.empty((n_c, j))
+        tot = np.empty(n_c)
         y = y0 + (row - (big_y - 1) / 2) * h
         for col in range(big_x):
             x = x0 + (col - (big_x - 1) / 2) * h
@@ -267,7 +274,7 @@ def render_disk(light, truth, h, x0, y0, distance, b0, radius,
                 xv = min(max(xv, 0.0), n_v - 1.0)
             kv = min(np.int64(xv), n_v - 2)
             fv = xv - kv
-            for c in range(3):
+            for c in range(n_c):
                 tot[c] = (1.0 - fv) * totals[kv, c] + fv * totals[kv + 1, c]
                 for qq in range(j):
                     amp[c, qq] = (1.0 - fv) * amplitudes[kv, c, qq] + fv * amplitudes[kv + 1, c, qq]
@@ -275,11 +282,14 @@ def render_disk(light, truth, h, x0, y0, distance, b0, radius,
             for pol in range(2):
                 e0 = e_index[pol] * j1
                 vs = v_sign[pol]
-                for c in range(3):
+                for c in range(n_c):
+                    out = pol * n_c + c - plane0
+                    if out < 0 or out >= n_out:
+                        continue
                     val = (acc[e0] + vs * acc[v_off]) * tot[c]
                     for qq in range(j):
                         val += amp[c, qq] * (acc[e0 + 1 + qq] + vs * acc[v_off + 1 + qq])
-                    light[pol * 3 + c, row, col] = scale * val
+                    light[out, row, col] = scale * val
             # The true B·n: the patch frame's observer lies toward +x at the sample's own angle.
             truth[row, col] = acc[b_off] * mu + acc[b_off + 1] * math.sin(view)
     return counts[:, 0].sum(), counts[:, 1].sum()

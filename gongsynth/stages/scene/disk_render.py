@@ -5,7 +5,9 @@ A full-disk scene from a patch library: the large-scale field filled with small 
 for a `~gongsynth.stages.scene.library.PatchLibrary`: the large scales
 (`gongsynth.stages.scene.surface.large_scale_grid`) on a heliographic grid,
 then one pass of `gongsynth.stages.scene.disk_kernel.render_disk` over the
-supersampled grid (~1 s for the default 4300² samples on 2 cores).
+supersampled grid (~1 s for the default 4300² samples on 2 cores).  A grid whose light
+would take more than `LIGHT_BYTES` (HMI's 12 planes of 8192² samples) is rendered a group
+of planes at a time, where the optics read them (a `~gongsynth.stages.scene.scene.DeferredStack`).
 """
 import warnings
 
@@ -16,12 +18,12 @@ from gongsynth.geometry import as_obstime, pointing_centre, pointing_offset, wcs
 from gongsynth.seeding import as_seed_sequence
 from gongsynth.stages.channels import CHANNEL_UNIT
 from gongsynth.stages.scene.disk_kernel import cell_table, render_disk
-from gongsynth.stages.scene.scene import Scene, radiance_at_earth, sky_grid
+from gongsynth.stages.scene.scene import DeferredStack, Scene, radiance_at_earth, sky_grid
 from gongsynth.stages.scene.surface import large_scale_grid
 from gongsynth.sun.rotation import CONVECTIVE_BLUESHIFT_FE6302
 from gongsynth.validation import check_quantity
 
-__all__ = ["library_scene", "VELOCITY_TERMS"]
+__all__ = ["library_scene", "VELOCITY_TERMS", "LIGHT_BYTES"]
 
 #: The large-scale velocity terms `library_scene` can switch.
 VELOCITY_TERMS = ("rotation", "observer", "blueshift")
@@ -39,6 +41,45 @@ def _velocity_terms(velocities):
 def _scene_seed(seed):
     """A 64-bit integer for the kernel's hash, from the run's seed."""
     return np.uint64(as_seed_sequence(seed).generate_state(1, np.uint64)[0])
+
+
+#: The most memory the light of a full-disk grid may hold at once: a grid whose planes need more (HMI's
+#: 12 planes of 8192² samples, 3.2 GB in float32) is rendered a group of planes at a time, each group
+#: when the optics first read one of its planes (at most 1 GiB; GONG's 6 × 4300² take 0.44 GB at once).
+LIGHT_BYTES = 2**30
+
+
+def _plane_group(n_planes, grid):
+    """How many light planes of ``grid`` are rendered at once (all, if they fit `LIGHT_BYTES`)."""
+    per_plane = grid[0] * grid[1] * np.dtype(np.float32).itemsize
+    return int(min(n_planes, max(1, LIGHT_BYTES // per_plane)))
+
+
+def _deferred_light(first, render, n_planes, unit):
+    """
+    The light as a `DeferredStack` whose planes are rendered a group at a time.
+
+    ``first`` holds the first group's planes (already rendered); asking for a plane of another
+    group renders that group in its place.  A whole plane is given as a copy, so that a reader that
+    keeps one (`gongsynth.stages.imagers.image_planes` keeps the first) does not keep its group.
+    """
+    group, grid = first.shape[0], first.shape[1:]
+    cache = {"start": 0, "block": first}
+
+    def rows(i, start, stop):
+        g0 = (i // group) * group
+        if cache["start"] != g0 or cache["block"] is None:
+            cache["block"] = None    # free the old group before the new one is made
+            block = np.zeros((min(group, n_planes - g0),) + grid, dtype=np.float32)
+            render(block, g0)
+            cache["start"], cache["block"] = g0, block
+        out = cache["block"][i - g0, start:stop]
+        return out.copy() if (start, stop) == (0, grid[0]) else out
+
+    def release():
+        cache["block"] = None
+
+    return DeferredStack((n_planes,) + grid, np.float32, unit, rows, release)
 
 
 def library_scene(library, *, obstime=None, instrument=None, detector_shape=None, supersampling=None,
@@ -119,7 +160,7 @@ def library_scene(library, *, obstime=None, instrument=None, detector_shape=None
                              observer=terms["observer"],
                              blueshift=CONVECTIVE_BLUESHIFT_FE6302 if terms["blueshift"] else None,
                              network=network)
-    light = np.zeros((len(inst.analysers),) + grid, dtype=np.float32)
+    n_planes = len(inst.analysers)
     blos = np.zeros(grid, dtype=np.float32)
     to_earth = radiance_at_earth(1 * CHANNEL_UNIT)
     basis = library.basis
@@ -128,21 +169,29 @@ def library_scene(library, *, obstime=None, instrument=None, detector_shape=None
     distance, b0 = get_earth(time).radius.to_value(u.km), sun.B0(time).to_value(u.rad)
     r_sun = radius.to_value(u.km)
     cells, (cell_j0, cell_i0) = cell_table(r_sun, cell_km, distance, b0)
-    on_disk, outside = render_disk(
-        light, blos, scale.to_value(u.rad), *pointing_offset(pointing), distance, b0, r_sun,
-        large.field, large.velocity, float(large.longitude[0]), float(large.latitude[0]),
-        float(large.longitude[1] - large.longitude[0]),
-        cell_km, cells, cell_j0, cell_i0, _scene_seed(seed), np.radians(library.theta),
-        np.asarray(library.line.limb_darkening, float),
-        library.level_net.astype(np.float64), level_first, level_count,
-        np.asarray(library.level_uniform, dtype=np.int64), np.asarray(library.patches),
-        np.asarray(library.uniform),
-        library.pixel_size.to_value(u.km), bool(library.mirror_ok), int(library.n_e),
-        np.asarray(library.e_index, dtype=np.int64), np.asarray(library.v_sign, dtype=np.float64),
-        basis.amplitudes, basis.totals, float(basis.velocity[0]),
-        float(basis.velocity[1] - basis.velocity[0]),
-        # The basis integrates over wavelength in nm; the channel unit is per cm of spectrum × cm.
-        float(to_earth.value * (1 * u.nm).to_value(u.cm)))
+
+    def render(light, plane0):
+        return render_disk(
+            light, blos, scale.to_value(u.rad), *pointing_offset(pointing), distance, b0, r_sun,
+            large.field, large.velocity, float(large.longitude[0]), float(large.latitude[0]),
+            float(large.longitude[1] - large.longitude[0]),
+            cell_km, cells, cell_j0, cell_i0, _scene_seed(seed), np.radians(library.theta),
+            np.asarray(library.line.limb_darkening, float),
+            library.level_net.astype(np.float64), level_first, level_count,
+            np.asarray(library.level_uniform, dtype=np.int64), np.asarray(library.patches),
+            np.asarray(library.uniform),
+            library.pixel_size.to_value(u.km), bool(library.mirror_ok), int(library.n_e),
+            np.asarray(library.e_index, dtype=np.int64), np.asarray(library.v_sign, dtype=np.float64),
+            basis.amplitudes, basis.totals, float(basis.velocity[0]),
+            float(basis.velocity[1] - basis.velocity[0]),
+            # The basis integrates over wavelength in nm; the channel unit is per cm of spectrum × cm.
+            float(to_earth.value * (1 * u.nm).to_value(u.cm)), plane0)
+
+    group = _plane_group(n_planes, grid)
+    light = np.zeros((group,) + grid, dtype=np.float32)
+    on_disk, outside = render(light, 0)
+    if group < n_planes:
+        light = _deferred_light(light, render, n_planes, to_earth.unit)
     if outside:
         warnings.warn(f"{outside} samples have a large-scale velocity beyond the library's Doppler basis "
                       f"(±{basis.max_velocity:.0f}): clamped", stacklevel=3)
@@ -154,6 +203,7 @@ def library_scene(library, *, obstime=None, instrument=None, detector_shape=None
     common = dict(boundary="zero", instrument=inst, detector_shape=det, centre=centre)
     truth = Scene(u.Quantity(blos, u.G, copy=False), scale, header, meta={**meta, "quantity": "blos"},
                   **common)
-    light_scene = Scene(u.Quantity(light, to_earth.unit, copy=False), scale, header, blos=truth.data,
+    data = light if isinstance(light, DeferredStack) else u.Quantity(light, to_earth.unit, copy=False)
+    light_scene = Scene(data, scale, header, blos=truth.data,
                         meta={**meta, "quantity": "radiance"}, **common)
     return light_scene, truth

@@ -34,10 +34,12 @@ This module builds the library of the Milne-Eddington Sun (`build_library`,
 the same `PatchLibrary` from the 3-D Sun by radiative transfer (minutes).
 `cached_library` builds either once per machine and keeps it on disk.
 """
+import dataclasses
 import hashlib
 import json
 import os
 import shutil
+import sys
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -54,6 +56,7 @@ from gongsynth.sun.photosphere import (
     DeferredStokes,
     NiLine,
     Photosphere,
+    me_line,
     model_photosphere,
 )
 
@@ -252,6 +255,8 @@ def build_library(*, seed=0, shape=(256, 256), pixel_size=384 * u.km, seeds_per_
         affected).
     instrument : `~gongsynth.instruments.base.Instrument` or str, optional
     line : `~gongsynth.sun.photosphere.NiLine`, optional
+        The Milne-Eddington line (default: the instrument's line, `~gongsynth.sun.photosphere.me_line`:
+        Ni I 676.8 nm for GONG, Fe I 617.3 nm for HMI).
     max_velocity : `~astropy.units.Quantity`, optional
         Largest Doppler shift the scene may apply (see `gongsynth.stages.scene.shifts.shift_basis`).
     levels : sequence of (str, dict), optional
@@ -271,7 +276,7 @@ def build_library(*, seed=0, shape=(256, 256), pixel_size=384 * u.km, seeds_per_
     >>> lib.n_levels, lib.patches.shape[::3], bool(lib.level_net[-1] > lib.level_net[0])
     (8, (4, 3), True)
     """
-    line = NiLine() if line is None else line
+    line = me_line(instruments.get(instrument).line) if line is None else line
     lay = library_layout(instrument=instrument, wavelength=wavelength, pixel_size=pixel_size, theta=theta,
                          seeds_per_level=seeds_per_level, levels=levels, mueller=mueller,
                          max_velocity=max_velocity, line=line)
@@ -335,7 +340,7 @@ def build_library(*, seed=0, shape=(256, 256), pixel_size=384 * u.km, seeds_per_
 _MEMO = {}
 # Modules whose code shapes the stored numbers: a change to any of them is a new library.
 _SOURCES = ("stages/scene/library.py", "stages/scene/library_layout.py", "stages/scene/shifts.py",
-            "instruments/gong/filters.py", "instruments/quadrature.py", "stages/channels.py",
+            "instruments/quadrature.py", "stages/channels.py",
             "sun/photosphere/model.py", "sun/photosphere/synthesis.py", "sun/photosphere/_kernel.py",
             "sun/photosphere/line.py", "sun/photosphere/columns.py")
 # ... and of the 3-D Sun's library (folders: every module in them).
@@ -362,22 +367,45 @@ def cache_directory():
     return Path(value)
 
 
-#: What of the instrument the stored numbers depend on (the filters and the line): a run at another
-#: plate scale, seeing or camera shares the library.
-_INSTRUMENT_KEYS = ("line_wavelength", "lande_g", "prefilter_center", "prefilter_fwhm", "prefilter_form",
-                    "lyot_delta_h", "lyot_angle_1", "lyot_angle_2", "lyot_angle_3", "michelson_fsr",
-                    "michelson_angle", "waveplate_step", "integration_half_width", "quadrature_step")
+#: What of an instrument the stored numbers do not depend on (optics, camera, schedule, reduction,
+#: detector maps): a run at another plate scale, seeing or camera shares the library.  Every other
+#: parameter of the instrument (its line, Landé factor, filters, quadrature), with its name and line,
+#: is part of the key, so that one instrument's library is never taken for another's; a parameter a
+#: new instrument adds is in the key until it is listed here (a rebuild, never a wrong reuse).
+_NOT_IN_KEY = frozenset((
+    "aperture", "plate_scale", "detector_shape", "supersampling", "seeing_fwhm", "psf_radius",
+    "effective_area",
+    "quantum_efficiency", "gain", "read_noise", "full_well", "adc_bits", "exposure_time", "frame_rate",
+    "frame_interval", "waveplate_rate", "lcvr_period", "sequence_cadence", "vector_cycle", "vector_window",
+    "vector_cadence", "dither_start", "dither_step", "dither_interval", "dither_cycle", "truncate_bits", "v0",
+    "reference_line_fwhm", "reference_line_depth", "lut_velocity_max", "lut_velocity_step",
+    "detector_map_seed", "flat_tilt", "flat_vignetting", "flat_dust_density", "flat_dust_depth_min",
+    "flat_dust_depth_max", "flat_dust_radius_min", "flat_dust_radius_max", "flat_prnu", "dark_level",
+    "dark_glow", "dark_glow_length", "dark_hot_fraction", "dark_hot_factor", "wrap_margin"))
+
+
+def _instrument_key(inst):
+    """The instrument's name, line and every parameter that shapes a library's numbers."""
+    params = {f.name: getattr(inst, f.name) for f in dataclasses.fields(inst) if f.name not in _NOT_IN_KEY}
+    return {"name": inst.name, "line": inst.line, **params}
+
+
+def _instrument_sources(inst):
+    """The modules of the instrument's own package (its filters): their code shapes the numbers too."""
+    return sorted(Path(sys.modules[type(inst).__module__].__file__).parent.glob("*.py"))
 
 
 def _key(arguments, sun):
     arguments = dict(arguments, sun=sun)
     inst = instruments.get(arguments.pop("instrument", None))
-    arguments["instrument"] = {name: getattr(inst, name) for name in _INSTRUMENT_KEYS}
+    arguments["instrument"] = _instrument_key(inst)
     root = Path(__file__).resolve().parents[2]
     digest = hashlib.sha256()
     for name in _SOURCES + (_SOURCES_3D if sun == "model-atmosphere" else ()):
         for path in (sorted((root / name).glob("*.py")) if (root / name).is_dir() else [root / name]):
             digest.update(path.read_bytes())
+    for path in _instrument_sources(inst):
+        digest.update(path.read_bytes())
     text = json.dumps({k: repr(v) for k, v in sorted(arguments.items())}, sort_keys=True)
     digest.update(text.encode())
     digest.update(np.__version__.encode())
@@ -538,9 +566,11 @@ def cached_library(*, sun="milne-eddington", progress=False, **arguments):
     if folder is not None and folder.exists():
         try:
             # ``line`` is the Milne-Eddington NiLine, or the 3-D library's spectral line (then the rows'
-            # limb darkening is NiLine's too, see library_rt).
-            me_line = arguments.get("line")
-            library = _load(folder, me_line if isinstance(me_line, NiLine) else NiLine())
+            # limb darkening is the Milne-Eddington description's of the instrument's line, see library_rt).
+            given = arguments.get("line")
+            rows_line = given if isinstance(given, NiLine) else me_line(
+                instruments.get(arguments.get("instrument")).line)
+            library = _load(folder, rows_line)
         except (OSError, ValueError, KeyError, TypeError) as exc:
             _warn(f"the cached patch library {folder} is damaged ({exc}); it is rebuilt and replaced")
             library = None

@@ -142,7 +142,8 @@ def library_layout(*, instrument, wavelength, pixel_size, theta, seeds_per_level
     ----------
     instrument : `~gongsynth.GONGInstrument` or None
     wavelength : `~astropy.units.Quantity` or None
-        Spectral grid (None: the paper's 51 points).
+        Spectral grid (None: the paper's 51 points about the instrument's line, as finely sampled as
+        its filters need: `gongsynth.sun.photosphere.default_wavelength`).
     pixel_size : `~astropy.units.Quantity`
         Patch column size (checked to be a length).
     theta : sequence of float
@@ -173,7 +174,7 @@ def library_layout(*, instrument, wavelength, pixel_size, theta, seeds_per_level
     (1, 2, True)
     """
     inst = instruments.get(instrument)
-    wavelength = default_wavelength() if wavelength is None else wavelength
+    wavelength = default_wavelength(inst) if wavelength is None else wavelength
     check_quantity(pixel_size, u.km, "pixel_size")
     theta = library_angles(theta)
     if len(seeds_per_level) != len(levels) or min(seeds_per_level) < 1:

@@ -33,9 +33,10 @@ from the built-in 3-D Sun:
   quantity for every line (τ_c at the line's own wavelength).
 
 The rows are divided by, and the renderer multiplies them again by, the
-continuum limb darkening of `gongsynth.sun.photosphere.NiLine` (Neckel & Labs
-at 676.8 nm) for every line: the same polynomial both ways, so for another line
-it only enters through the interpolation between the library's angles.
+continuum limb darkening of the Milne-Eddington description of the instrument's
+line (`gongsynth.sun.photosphere.me_line`: Neckel & Labs at 676.8 or 617.3 nm):
+the same polynomial both ways, so it only enters through the interpolation
+between the library's angles.
 
 The spectra of the 3-D Sun carry their own granular flows, hence their own
 convective blueshift; the renderer leaves out the tabulated one for such a
@@ -51,13 +52,14 @@ import inspect
 import astropy.units as u
 import numpy as np
 
+from gongsynth import instruments
 from gongsynth.seeding import as_seed_sequence, child_sequence
 from gongsynth.stages.scene.library import LEVELS, PatchLibrary
 from gongsynth.stages.scene.library_layout import library_layout
 from gongsynth.sun.atmosphere import Atmosphere
 from gongsynth.sun.model_atmosphere import model_atmosphere
 from gongsynth.sun.model_atmosphere.builder import reference_stratifications
-from gongsynth.sun.photosphere import NiLine
+from gongsynth.sun.photosphere import me_line
 from gongsynth.sun.rt import default_wavelength, get_line
 from gongsynth.sun.rt import synthesize as rt_synthesize
 
@@ -163,8 +165,9 @@ def build_atmosphere_library(*, seed=0, shape=ATMOSPHERE_SHAPE, pixel_size=384 *
         A progress bar over the patches and angles.
     line : str or `~gongsynth.sun.rt.LineData`, optional
         The spectral line synthesised (a name of `gongsynth.sun.rt.LINES`,
-        e.g. ``"Fe I 617.3"``; default ``"Ni I 676.8"``).  Part of the cache key
-        of `gongsynth.stages.scene.library.cached_library`.
+        e.g. ``"Fe I 617.3"``; default: the instrument's line, Ni I 676.8 nm for
+        GONG, Fe I 617.3 nm for HMI).  Part of the cache key of
+        `gongsynth.stages.scene.library.cached_library` (as the instrument's line is).
 
     Returns
     -------
@@ -178,8 +181,9 @@ def build_atmosphere_library(*, seed=0, shape=ATMOSPHERE_SHAPE, pixel_size=384 *
     >>> lib.n_levels, lib.patches.shape[:4], bool(lib.level_net[-1] > lib.level_net[3])
     (6, (4, 8, 8, 2), True)
     """
-    rt_line = get_line(line)
-    line = NiLine()
+    inst = instruments.get(instrument)
+    rt_line = get_line(inst.line if line is None else line)
+    line = me_line(inst.line)
     wavelength = default_wavelength(rt_line) if wavelength is None else wavelength
     lay = library_layout(instrument=instrument, wavelength=wavelength, pixel_size=pixel_size, theta=theta,
                          seeds_per_level=seeds_per_level, levels=levels, mueller=mueller,

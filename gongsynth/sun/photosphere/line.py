@@ -15,13 +15,19 @@ import numpy as np
 
 from gongsynth.validation import check_quantity
 
-__all__ = ["NiLine", "NECKEL_LABS_676"]
+__all__ = ["NiLine", "NECKEL_LABS_676", "NECKEL_LABS_617", "FE_I_6173_ME", "ME_LINES",
+           "me_line"]
 
 #: Neckel & Labs (1994, Sol. Phys. 153, 91) limb-darkening polynomial
 #: I(μ)/I(1) = Σ a_k μ^k at 676.78 nm: their Table coefficients at 669.400 and
 #: 700.875 nm interpolated linearly in wavelength and normalised to unit sum.
 #: I(0.5)/I(1) = 0.760, I(0)/I(1) = 0.354.
 NECKEL_LABS_676 = (0.35435, 1.34727, -1.96564, 2.58568, -1.86144, 0.53977)
+
+#: The same at 617.33 nm (HMI's Fe I line): Neckel & Labs (1994) Table coefficients at 610.975 and
+#: 640.970 nm interpolated linearly in wavelength and normalised to unit sum.  I(0.5)/I(1) = 0.739,
+#: I(0)/I(1) = 0.314.
+NECKEL_LABS_617 = (0.31446, 1.35342, -1.82653, 2.35727, -1.68785, 0.48924)
 
 
 @dataclass(frozen=True)
@@ -139,3 +145,45 @@ class NiLine:
         `NiLine`
         """
         return dataclasses.replace(self, **changes)
+
+
+#: Milne–Eddington description of the solar Fe I 617.33 nm line (HMI's), tuned as `NiLine` is: β = 4
+#: and the damping kept, Δλ_D and η0 fitted so that the spatial mean of the built-in photosphere at disk
+#: centre (`model_photosphere`, 256² columns of 96 km, seed 0, no spot) has the observed disk-centre
+#: central depth 0.62 and FWHM 10.2 pm (Kitt Peak FTS atlas as quoted by Norton et al. 2006, Sol. Phys.
+#: 239, 69, the numbers ``tests/test_rt_lines.py`` holds the radiative transfer to): Δλ_D = 3.29 pm
+#: (≈ 1.60 km/s) and η0 = 5.47 (least squares, ``tests/test_hmi_fulldisk.py`` checks them); the
+#: same patch gives Ni I (`NiLine`) 0.61 and 9.8 pm against its 0.60 and 10.0 pm.  Continuum
+#: 3.2e14 erg s⁻¹ cm⁻² sr⁻¹ cm⁻¹ near 617.3 nm (Neckel & Labs 1984, the value of
+#: `gongsynth.instruments.hmi.noise.CONTINUUM_INTENSITY`), limb darkening `NECKEL_LABS_617`.  The
+#: Landé factor is the instrument's (``lande_g = None``): HMI's 2.5 is the line's own (J = 1 → 0,
+#: Norton et al. 2006).
+FE_I_6173_ME = NiLine(doppler_width=3.29 * u.pm, line_strength=5.47,
+                      continuum_intensity=3.2e14 * u.Unit("erg / (s cm2 sr cm)"),
+                      limb_darkening=NECKEL_LABS_617)
+
+#: The Milne–Eddington description of each line of `gongsynth.sun.rt.LINES`, by name.
+ME_LINES = {"Ni I 676.8": NiLine(), "Fe I 617.3": FE_I_6173_ME}
+
+
+def me_line(name="Ni I 676.8"):
+    """
+    The Milne–Eddington description (`ME_LINES`) of a line, by its name (an instrument's ``line``).
+
+    Parameters
+    ----------
+    name : str
+        A key of `ME_LINES`, e.g. ``instrument.line``.
+
+    Returns
+    -------
+    `NiLine`
+
+    Examples
+    --------
+    >>> me_line() == NiLine(), me_line("Fe I 617.3").limb_darkening == NECKEL_LABS_617
+    (True, True)
+    """
+    if name not in ME_LINES:
+        raise ValueError(f"the Milne-Eddington Sun has no line {name!r}; it knows {tuple(ME_LINES)}")
+    return ME_LINES[name]

@@ -28,7 +28,7 @@ from gongsynth import instruments
 from gongsynth.geometry import check_geometry, los_basis
 from gongsynth.sun.photosphere._kernel import me_kernel, me_project_kernel, voigt_table
 from gongsynth.sun.photosphere.columns import Photosphere
-from gongsynth.sun.photosphere.line import NiLine
+from gongsynth.sun.photosphere.line import NiLine, me_line
 from gongsynth.sun.stokes import RADIANCE_UNIT, StokesCube
 from gongsynth.validation import check_wavelength_grid
 
@@ -182,7 +182,7 @@ def synthesize(photosphere, mu=1.0, wavelength=None, *, los_azimuth=-90 * u.deg,
         Source of the rest wavelength (``line_wavelength``) and of the Landé
         factor (``lande_g``, unless ``line.lande_g`` is set).
     line : `~gongsynth.sun.photosphere.NiLine`, optional
-        Milne–Eddington line parameters (default `NiLine()`).
+        Milne–Eddington line parameters (default: the instrument's line, `me_line`).
     method : {"numba", "numpy"}, optional
         "numba" (default): the parallel kernel with a tabulated Voigt function;
         "numpy": the vectorised reference with the exact Faddeeva function,
@@ -229,7 +229,7 @@ def _checked_inputs(photosphere, mu, wavelength, los_azimuth, instrument, line, 
     if method not in _METHODS:
         raise ValueError(f"method must be one of {_METHODS}, got {method!r}")
     instrument = instruments.get(instrument)   # any of the family: its line's wavelength and Lande factor
-    line = NiLine() if line is None else line
+    line = me_line(instrument.line) if line is None else line
     if not isinstance(line, NiLine):
         raise TypeError(f"line must be a NiLine or None, got {type(line).__name__}")
     wavelength = default_wavelength(instrument) if wavelength is None else wavelength

@@ -1,0 +1,76 @@
+"""
+Benchmark of a full-disk HMI 45-s magnetogram (4096² at 0.504″): time and memory per stage.
+
+Each run is a fresh process (``simulate(instrument="hmi", mode="full-disk", duration=0.75 min)`` at
+the real HMI map's date, then ``save``), first with an empty library cache (the library is built:
+the Milne-Eddington Sun's in seconds, the 3-D Sun's by radiative transfer in minutes), then with it
+cached.  Printed: wall and CPU time, each stage's time, the peak resident memory of the process
+(VmHWM) and of each stage (the resident set sampled every 0.2 s while it runs), and the load average
+(the machine is shared: compare CPU times, or ratios within one run).
+
+    python benchmarks/bench_fulldisk_hmi.py [--sun model-atmosphere] [--shape 4096] [--cached-only]
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import textwrap
+
+CODE = textwrap.dedent("""
+    import json, sys, threading, time
+    start = time.perf_counter()
+    import astropy.units as u, gongsynth
+    stage, peak = ["import"], {}
+
+    def watch():
+        while True:
+            rss = int([x for x in open("/proc/self/status") if x.startswith("VmRSS")][0].split()[1]) / 2**20
+            peak[stage[0]] = max(peak.get(stage[0], 0.0), rss)
+            time.sleep(0.2)
+
+    import gongsynth.chain
+    run_stage = gongsynth.chain.Stage.__call__
+
+    def named(self, state):     # the stage now running, for the sampler
+        stage[0] = self.name
+        return run_stage(self, state)
+
+    gongsynth.chain.Stage.__call__ = named
+    threading.Thread(target=watch, daemon=True).start()
+    cpu = time.process_time()
+    result = gongsynth.simulate(instrument="hmi", mode="full-disk", duration=0.75 * u.min, seed=1,
+                                obstime="2010-10-20T00:00", sun=sys.argv[1], detector_shape=int(sys.argv[2]),
+                                progress=False)
+    stage[0] = "save"
+    result.save(sys.argv[3], overwrite=True)
+    hwm = int([x for x in open("/proc/self/status") if x.startswith("VmHWM")][0].split()[1]) / 2**20
+    print(json.dumps({"wall_s": time.perf_counter() - start, "cpu_s": time.process_time() - cpu,
+                      "stages_s": {k: round(v, 1) for k, v in result.timings.items()},
+                      "peak_GB": round(hwm, 2), "stage_peak_GB": {k: round(v, 2) for k, v in peak.items()}}))
+""")
+
+
+def run(sun, shape, cache, out):
+    env = {**os.environ, "GONGSYNTH_CACHE_DIR": cache}
+    done = subprocess.run([sys.executable, "-c", CODE, sun, str(shape), out], env=env, capture_output=True,
+                          text=True, check=True)
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
+    parser.add_argument("--sun", default="milne-eddington", choices=("milne-eddington", "model-atmosphere"))
+    parser.add_argument("--shape", type=int, default=4096)
+    parser.add_argument("--cached-only", action="store_true", help="skip the empty-cache run")
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        cache = os.environ.get("GONGSYNTH_CACHE_DIR", tmp) if args.cached_only else tmp
+        for label in (() if args.cached_only else ("empty cache",)) + ("cached library",):
+            numbers = run(args.sun, args.shape, cache, os.path.join(tmp, "out"))
+            print(f"{label:15s} load {os.getloadavg()[0]:.1f}: {json.dumps(numbers)}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,103 @@
+"""Full-disk HMI: the patch library in the instrument's line, its cache key, the plane groups, HMI's PSF."""
+import astropy.units as u
+import numpy as np
+import pytest
+
+from gongsynth import instruments
+from gongsynth.instruments.hmi.psf import WACHTER_2012, encircled_energy, radius_unit
+from gongsynth.stages.psf import psf_kernel, psf_profile
+from gongsynth.stages.scene import disk_render
+from gongsynth.stages.scene.disk_render import library_scene
+from gongsynth.stages.scene.library import _key, build_library
+from gongsynth.sun.photosphere import NiLine, me_line, model_photosphere, synthesize
+from gongsynth.sun.photosphere.line import NECKEL_LABS_617
+
+HMI = instruments.get("hmi")
+GONG = instruments.get("gong")
+TINY = dict(shape=(12, 12), pixel_size=3 * u.Mm, seeds_per_level=(1, 1, 1, 1), theta=(0, 60))
+
+
+@pytest.fixture(scope="module")
+def hmi_library():
+    return build_library(instrument=HMI, **TINY)
+
+
+def test_library_key_follows_the_instrument_and_its_line():
+    """GONG's library is never taken for HMI's; parameters that do not shape the rows share a key."""
+    args = dict(seed=0, knobs={})
+    gong, hmi = _key({**args, "instrument": GONG}, "milne-eddington"), _key({**args, "instrument": HMI},
+                                                                             "milne-eddington")
+    assert gong != hmi
+    assert _key({**args, "instrument": HMI}, "model-atmosphere") not in (gong, hmi)
+    # optics and camera: the same library; a filter or the Landé factor: another one
+    assert _key({**args, "instrument": HMI.replace(plate_scale=8 * u.arcsec, detector_shape=256)},
+                "milne-eddington") == hmi
+    for change in ({"nb_fsr": 171 * u.mAA}, {"lande_g": 2.4 * u.one}):
+        assert _key({**args, "instrument": HMI.replace(**change)}, "milne-eddington") != hmi
+
+
+def test_the_hmi_library_is_synthesised_in_fe_i(hmi_library):
+    """The Milne-Eddington description of Fe I 617.3, its limb darkening, HMI's 12 planes."""
+    assert hmi_library.line == me_line("Fe I 617.3") and hmi_library.line.limb_darkening == NECKEL_LABS_617
+    assert hmi_library.basis.amplitudes.shape[1] == 6        # six tunings per polarisation
+    assert me_line(GONG.line) == NiLine()      # GONG's library keeps Ni I (its default line)
+    light, truth = library_scene(hmi_library, instrument=HMI.replace(plate_scale=40 * u.arcsec),
+                                 detector_shape=64, supersampling=1)
+    data = light.data.value
+    centre = data[:, 32, 32]
+    assert data.shape == (12, 64, 64) and np.all(centre > 0)
+    # I±V at each tuning: the line's wings (I0, I5) brighter than its core (I2, I3) in both states
+    for pol in (0, 1):
+        p = centre[6 * pol:6 * pol + 6]
+        assert min(p[0], p[5]) > max(p[2], p[3])
+
+
+def test_fe_i_milne_eddington_profile_matches_the_atlas():
+    """Disk-centre mean profile of the built-in photosphere: depth 0.62, FWHM 10.2 pm (Norton et al. 2006)
+    to within the patch-to-patch scatter of a smaller patch than the fit's."""
+    ph = model_photosphere(shape=(64, 64), pixel_size=96 * u.km, seed=0, spot=False)
+    lam = np.linspace(-0.25, 0.25, 251) * u.nm + HMI.line_wavelength
+    i = synthesize(ph, 1.0, lam, instrument=HMI).I.value.mean(axis=(0, 1)).astype(float)
+    x = lam.to_value(u.pm)
+    depth = 1 - i.min() / i[0]
+    half = i[0] * (1 - depth / 2)
+    core = int(np.argmin(i))
+    left = np.interp(half, i[:core + 1][::-1], x[:core + 1][::-1])    # I decreasing to the core
+    right = np.interp(half, i[core:], x[core:])
+    assert abs(depth - 0.62) < 0.01 and abs(right - left - 10.2) < 0.3
+
+
+def test_plane_groups_render_the_same_light(hmi_library, monkeypatch):
+    """A grid rendered a group of planes at a time (bounded memory) has the same bits as all at once."""
+    inst = HMI.replace(plate_scale=40 * u.arcsec)
+    whole, truth = library_scene(hmi_library, instrument=inst, detector_shape=48, supersampling=1, seed=3)
+    monkeypatch.setattr(disk_render, "LIGHT_BYTES", 5 * 48 * 48 * 4)      # groups of 5 planes: 5, 5, 2
+    grouped, truth2 = library_scene(hmi_library, instrument=inst, detector_shape=48, supersampling=1, seed=3)
+    planes = grouped.planes
+    assert type(planes).__name__ == "DeferredStack"
+    for i in (0, 7, 11, 2, 5):   # out of order: a group is rendered again when asked for
+        assert np.array_equal(np.asarray(planes[i]), whole.data.value[i])
+    assert np.array_equal(planes[6][10:20], whole.data.value[6, 10:20])
+    assert np.array_equal(truth.data, truth2.data)
+
+
+def test_hmi_psf_is_wachters_through_the_shared_stage():
+    """The optics stage's PSF of HMI is its instrument's (Wachter et al. 2012), GONG's the Airy ⊗ seeing."""
+    r = np.array([0.0, 0.5, 3.0, 30.0])
+    unit = radius_unit(HMI)
+    x = r / unit
+    p = WACHTER_2012
+    shape = (1 - p["epsilon"]) * np.exp(-(x / p["omega"]) ** 2) + p["epsilon"] / (1 + (x / p["width"]) ** 3)
+    values = psf_profile(r * u.arcsec, HMI).to_value(u.arcsec**-2)
+    assert np.allclose(values / values[0], shape / shape[0], rtol=1e-12)
+    # unit integral: the analytic encircled energy at 60″ against the sampled kernel's truncation
+    scale = HMI.plate_scale.to_value(u.arcsec) / HMI.supersampling
+    radii = np.arange(0, 60, 0.01) + 0.005
+    inside = np.sum(2 * np.pi * radii * psf_profile(radii * u.arcsec, HMI).value) * 0.01
+    assert inside == pytest.approx(encircled_energy(60.0, HMI), rel=1e-4)
+    assert 1 - encircled_energy(10.0, HMI) == pytest.approx(0.0307, abs=5e-4)
+    kernel = psf_kernel(scale * u.arcsec, HMI)
+    assert kernel.shape[0] == 2 * int(np.ceil(60 / scale)) + 1 and kernel.sum() == pytest.approx(1)
+    # GONG: unchanged, the Airy pattern's first zero at 1.22 λ/D
+    airy = psf_profile([0, 6.08] * u.arcsec, GONG, seeing=False).value
+    assert airy[1] < 1e-4 * airy[0]
