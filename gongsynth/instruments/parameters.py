@@ -152,6 +152,30 @@ class InstrumentParameters:
                 return f.metadata[_DOC]
         raise KeyError(f"{cls.__name__} has no parameter {name!r}")
 
+    @classmethod
+    def resolve(cls, instrument):
+        """
+        The instrument a function should use: the class's default for None, else the one given.
+
+        Parameters
+        ----------
+        instrument : instance of this class or None
+
+        Returns
+        -------
+        instance of this class
+
+        Raises
+        ------
+        TypeError
+            If ``instrument`` is neither None nor an instance of this class.
+        """
+        if instrument is None:
+            return cls()
+        if not isinstance(instrument, cls):
+            raise TypeError(f"instrument must be an {cls.__name__} or None, got {type(instrument).__name__}")
+        return instrument
+
     def replace(self, **changes):
         """
         Return a copy with some parameters changed.

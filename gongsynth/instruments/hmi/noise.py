@@ -23,13 +23,13 @@ averages the vector camera's LCP/RCP sets (one set of 12 per 135-s cycle) over
 """
 import math
 
-import astropy.constants as const
 import astropy.units as u
 import numpy as np
 
 from gongsynth.instruments.hmi.filters import filter_quadrature
 from gongsynth.instruments.hmi.observables import reduce_hmi, reference_filtergrams
 from gongsynth.instruments.hmi.parameters import N_TUNINGS, resolve_hmi
+from gongsynth.instruments.tunable import filtergram_electrons
 
 __all__ = ["CONTINUUM_COUNT_RATE", "CONTINUUM_INTENSITY", "LIU_2012_NOISE", "continuum_electrons",
            "effective_area_from_counts", "sequence_weights", "magnetogram_noise"]
@@ -69,12 +69,7 @@ def continuum_electrons(instrument=None, intensity=CONTINUUM_INTENSITY):
         Shape (6,), in electron.
     """
     inst = resolve_hmi(instrument)
-    photon = (const.h * const.c / inst.line_wavelength).to(u.erg)
-    width = _filter_widths(inst) * u.Unit("mAA")
-    pixel = (inst.plate_scale**2).to(u.sr)
-    n = (intensity * width * pixel * inst.effective_area * inst.quantum_efficiency
-         * inst.exposure_time / photon)
-    return n.to(u.one).value * u.electron
+    return filtergram_electrons(inst, intensity, _filter_widths(inst))
 
 
 def effective_area_from_counts(instrument=None, count_rate=CONTINUUM_COUNT_RATE,

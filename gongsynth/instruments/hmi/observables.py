@@ -50,7 +50,7 @@ import numpy as np
 
 from gongsynth.instruments.hmi.filters import filter_quadrature
 from gongsynth.instruments.hmi.parameters import N_HMI_PLANES, N_TUNINGS, TUNING_INDICES, resolve_hmi
-from gongsynth.instruments.hmi.profiles import gaussian_line
+from gongsynth.instruments.tunable import reference_line_filtergrams
 from gongsynth.stages.reduction import Observables
 from gongsynth.validation import check_finite
 
@@ -235,15 +235,8 @@ def reference_filtergrams(shift, instrument=None):
         Shape (6, n), in mÅ (∫ R_k I dλ for a unit continuum).
     """
     inst = resolve_hmi(instrument)
-    shift = np.atleast_1d(np.asarray(shift, dtype=float))
-    offset, weights, responses = filter_quadrature(inst)
-    depth = inst.reference_line_depth.to_value(u.one)
-    fwhm = inst.reference_line_fwhm.to_value(_mA)
-    # The line only matters within a few widths of the largest shift: integrate the dip there.
-    near = np.abs(offset) <= np.abs(shift).max() + 6 * fwhm
-    kernel = responses[:, near] * weights[near]
-    dip = 1 - gaussian_line(offset[near][None, :], depth, fwhm, np.asarray(shift)[:, None])
-    return (responses @ weights)[:, None] - kernel @ dip.T
+    depth, fwhm = inst.reference_line_depth.to_value(u.one), inst.reference_line_fwhm.to_value(_mA)
+    return reference_line_filtergrams(shift, filter_quadrature(inst), depth, fwhm)
 
 
 def _split(planes):

@@ -291,27 +291,8 @@ class HMIInstrument(InstrumentParameters):
 
 
 def resolve_hmi(instrument):
-    """
-    The HMI a function should use: the default for None, else the one given.
-
-    Parameters
-    ----------
-    instrument : `HMIInstrument` or None
-
-    Returns
-    -------
-    `HMIInstrument`
-
-    Raises
-    ------
-    TypeError
-        If ``instrument`` is neither None nor an `HMIInstrument`.
-    """
-    if instrument is None:
-        return HMIInstrument()
-    if not isinstance(instrument, HMIInstrument):
-        raise TypeError(f"instrument must be an HMIInstrument or None, got {type(instrument).__name__}")
-    return instrument
+    """The HMI a function should use (`HMIInstrument.resolve`: the default for None, else the one given)."""
+    return HMIInstrument.resolve(instrument)
 
 
 #: Allowed range of each numeric field in its canonical unit ("[" and "]" inclusive);

@@ -26,13 +26,13 @@ the Monte Carlo averages five independent reductions, exactly that.
 """
 import math
 
-import astropy.constants as const
 import astropy.units as u
 import numpy as np
 
 from gongsynth.instruments.mdi.filters import filter_quadrature
 from gongsynth.instruments.mdi.observables import reduce_mdi, reference_filtergrams
 from gongsynth.instruments.mdi.parameters import N_MDI_PLANES, resolve_mdi
+from gongsynth.instruments.tunable import filtergram_electrons
 
 __all__ = ["FILTERGRAM_COUNTS", "FILTERGRAM_SHOT_NOISE", "CONTINUUM_INTENSITY", "DOCUMENTED_NOISE",
            "continuum_electrons", "effective_area_from_counts", "magnetogram_noise"]
@@ -74,12 +74,7 @@ def continuum_electrons(instrument=None, intensity=CONTINUUM_INTENSITY):
         Shape (5,), in electron.
     """
     inst = resolve_mdi(instrument)
-    photon = (const.h * const.c / inst.line_wavelength).to(u.erg)
-    width = _filter_widths(inst) * u.Unit("mAA")
-    pixel = (inst.plate_scale**2).to(u.sr)
-    n = (intensity * width * pixel * inst.effective_area * inst.quantum_efficiency
-         * inst.exposure_time / photon)
-    return n.to(u.one).value * u.electron
+    return filtergram_electrons(inst, intensity, _filter_widths(inst))
 
 
 def effective_area_from_counts(instrument=None, counts=FILTERGRAM_COUNTS, shot_noise=FILTERGRAM_SHOT_NOISE,

@@ -54,9 +54,9 @@ import astropy.units as u
 import numpy as np
 
 from gongsynth.instruments.base import Observables
-from gongsynth.instruments.hmi.profiles import gaussian_line
 from gongsynth.instruments.mdi.filters import filter_quadrature
 from gongsynth.instruments.mdi.parameters import N_MDI_PLANES, N_TUNINGS, resolve_mdi
+from gongsynth.instruments.tunable import reference_line_filtergrams
 from gongsynth.validation import check_finite
 
 __all__ = ["LookupTable", "doppler_ratio", "lookup_table", "reference_filtergrams", "onboard_continuum",
@@ -142,13 +142,8 @@ def reference_filtergrams(shift, instrument=None):
         Shape (5, n), in mÅ (∫ R_k I dλ for a unit continuum).
     """
     inst = resolve_mdi(instrument)
-    shift = np.atleast_1d(np.asarray(shift, dtype=float))
-    offset, weights, responses = filter_quadrature(inst)
-    depth = inst.reference_line_depth.to_value(u.one)
-    fwhm = inst.reference_line_fwhm.to_value(_mA)
-    near = np.abs(offset) <= np.abs(shift).max() + 6 * fwhm   # the dip matters only near the line
-    dip = 1 - gaussian_line(offset[near][None, :], depth, fwhm, shift[:, None])
-    return (responses @ weights)[:, None] - (responses[:, near] * weights[near]) @ dip.T
+    depth, fwhm = inst.reference_line_depth.to_value(u.one), inst.reference_line_fwhm.to_value(_mA)
+    return reference_line_filtergrams(shift, filter_quadrature(inst), depth, fwhm)
 
 
 @dataclasses.dataclass(frozen=True)

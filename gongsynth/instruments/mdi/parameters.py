@@ -306,45 +306,10 @@ class MDIInstrument(InstrumentParameters):
                 "mdilevel": (self.level, "MDI archive level modelled (1.5 or 1.8)"),
                 "recalfac": (self.archive_factor, "factor applied to the onboard B")}
 
-    @classmethod
-    def source(cls, name):
-        """
-        The documented source of a parameter.
-
-        Examples
-        --------
-        >>> MDIInstrument.source("aperture")
-        'aperture diameter (Scherrer et al. 1995)'
-        """
-        from dataclasses import fields
-        for f in fields(cls):
-            if f.name == name:
-                return f.metadata["doc"]
-        raise KeyError(f"MDIInstrument has no parameter {name!r}")
-
 
 def resolve_mdi(instrument):
-    """
-    The MDI a function should use: the default for None, else the one given.
-
-    Parameters
-    ----------
-    instrument : `MDIInstrument` or None
-
-    Returns
-    -------
-    `MDIInstrument`
-
-    Raises
-    ------
-    TypeError
-        If ``instrument`` is neither None nor an `MDIInstrument`.
-    """
-    if instrument is None:
-        return MDIInstrument()
-    if not isinstance(instrument, MDIInstrument):
-        raise TypeError(f"instrument must be an MDIInstrument or None, got {type(instrument).__name__}")
-    return instrument
+    """The MDI a function should use (`MDIInstrument.resolve`: the default for None, else the one given)."""
+    return MDIInstrument.resolve(instrument)
 
 
 #: Allowed range of each numeric field in its canonical unit.
