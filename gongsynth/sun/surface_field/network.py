@@ -192,10 +192,14 @@ class SupergranularNetwork:
         d, idx = cKDTree(centres).query(points, k=2)
         sep = np.linalg.norm(centres[idx[:, 1]] - centres[idx[:, 0]], axis=1)
         wall = r_km * (d[:, 1] ** 2 - d[:, 0] ** 2) / (2 * sep)
-        # Grid-cell areas (cm²): equal-angle cells shrink as cos(latitude).
+        # Grid-cell areas (cm²): equal-angle cells shrink as cos(latitude); a cell that reaches a pole
+        # is the polar cap r² Δλ (1 − sin φ_edge) (not the zero area of cos 90°, which would turn its
+        # flux into an unbounded field).
         step_lon = abs(lon[1] - lon[0]) if lon.size > 1 else 2 * math.pi
         step_lat = abs(lat[1] - lat[0]) if lat.size > 1 else math.pi
-        area = (r_km * 1e5) ** 2 * step_lon * step_lat * np.maximum(np.cos(glat), 1e-9)
+        edge = np.abs(glat) - step_lat / 2
+        polar = np.abs(glat) + step_lat / 2 > math.pi / 2
+        area = (r_km * 1e5) ** 2 * step_lon * np.where(polar, 1 - np.sin(edge), step_lat * np.cos(glat))
         # Avoid laying flux twice on a longitude that the grid holds at both ends (-180 and 180).
         unique = np.ones(lon.size, dtype=bool)
         if lon.size > 1 and math.isclose(lon[-1] - lon[0], 2 * math.pi, rel_tol=1e-9):
