@@ -107,7 +107,7 @@ def run_config(config):
 
 def run_key(config):
     """
-    The cache key of a run: a hash of its full configuration and of the gongsynth version.
+    The cache key of a run: a hash of its full configuration (`run_config`'s) and of the gongsynth version.
 
     Parameters
     ----------
@@ -126,7 +126,7 @@ def run_key(config):
     >>> run_key(base) == run_key(SimulationConfig(seed=1)), run_key(base) == run_key(base.replace(seed=2))
     (True, False)
     """
-    text = f"gongsynth {__version__}\n{config.to_toml(comments=False)}"
+    text = f"gongsynth {__version__}\n{run_config(config).to_toml(comments=False)}"
     return hashlib.sha256(text.encode()).hexdigest()[:20]
 
 
@@ -154,6 +154,7 @@ def run_entry(config, folder=None):
     Parameters
     ----------
     config : `~gongsynth.config.SimulationConfig`
+        The run (as `run_config` makes it).
     folder : path-like, optional
         Cache folder (on a cluster: one every worker can write).
 
@@ -162,6 +163,7 @@ def run_entry(config, folder=None):
     bytes
         The entry: a FITS file (see `read_entry`).
     """
+    config = run_config(config)
     result = simulate(config=config, progress=False)
     missing = [name for name in RUN_MAPS if getattr(result, name) is None]
     if missing:
@@ -169,8 +171,8 @@ def run_entry(config, folder=None):
     primary = fits.PrimaryHDU()
     primary.header["GSKEY"] = (run_key(config), "hash of configuration and version")
     primary.header["GSVERS"] = (__version__, "gongsynth version")
-    hdus = [primary, fits.ImageHDU(np.frombuffer(config.to_toml(comments=False).encode(), np.uint8),
-                                   name="CONFIG")]
+    text = config.to_toml(comments=False)
+    hdus = [primary, fits.ImageHDU(np.frombuffer(text.encode(), np.uint8), name="CONFIG")]
     for name in RUN_MAPS:
         smap = getattr(result, name)
         # float64: what is read back is what the table is built from, whatever the maps' own dtype.
@@ -212,7 +214,8 @@ def read_entry(entry, config):
             warnings.simplefilter("error")
             with fits.open(io.BytesIO(data)) as hdus:
                 stored = hdus["CONFIG"].data.tobytes().decode()
-                if hdus[0].header.get("GSVERS") != __version__ or stored != config.to_toml(comments=False):
+                expected = run_config(config).to_toml(comments=False)
+                if hdus[0].header.get("GSVERS") != __version__ or stored != expected:
                     raise ValueError("it belongs to another configuration or gongsynth version")
                 planes = {name: (hdus[name].data.astype(np.float64), hdus[name].header.copy())
                           for name in (*RUN_MAPS, "RESOLUTION")}
