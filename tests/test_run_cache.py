@@ -90,7 +90,7 @@ def test_a_failed_run_is_named_and_the_others_are_kept(tmp_path, monkeypatch):
     simulate = run_cache.simulate
     monkeypatch.setattr(run_cache, "simulate", fails_for_seed_1)
     named = rf"run 0 of the sweep, gong at latitude 70 deg, seed 1 \(cache key {run_key(configs[0])}\)"
-    with pytest.raises(RuntimeError, match=named + ", failed: FloatingPointError: a broken run; the finished"):
+    with pytest.raises(RuntimeError, match=named + ", failed: FloatingPointError: a broken run; the finish"):
         list(cached_runs(configs, cache=tmp_path, progress=False))
     assert not entry_path(tmp_path, configs[0]).exists() and entry_path(tmp_path, configs[1]).exists()
 
