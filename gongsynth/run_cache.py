@@ -290,33 +290,31 @@ def cached_runs(configs, *, cache=None, client=None, workers=None, progress=True
     folder = None if cache is None else Path(cache)
     if folder is not None:
         folder.mkdir(parents=True, exist_ok=True)
-    bar = tqdm(total=len(configs), disable=not progress, desc=desc)
-    todo = []
-    for index, config in enumerate(configs):
-        run = None if folder is None else _cached(entry_path(folder, config), config)
-        if run is None:
-            todo.append(index)
-        else:
-            bar.update()
-            yield index, run
-    bar.set_postfix(cached=len(configs) - len(todo), refresh=False)
     failures = []
-    for position, entry in simulate_each([configs[i] for i in todo], client=client, workers=workers,
-                                         progress=False, task=partial(run_entry, folder=folder)):
-        index = todo[position]
-        bar.update()
-        if isinstance(entry, BaseException):
-            failures.append((index, entry))
-            continue
-        yield index, read_entry(entry, configs[index])
-    bar.close()
+    with tqdm(total=len(configs), disable=not progress, desc=desc) as bar:
+        todo = []
+        for index, config in enumerate(configs):
+            run = None if folder is None else _cached(entry_path(folder, config), config)
+            if run is None:
+                todo.append(index)
+            else:
+                bar.update()
+                yield index, run
+        bar.set_postfix(cached=len(configs) - len(todo), refresh=False)
+        for position, entry in simulate_each([configs[i] for i in todo], client=client, workers=workers,
+                                             progress=False, task=partial(run_entry, folder=folder)):
+            index = todo[position]
+            bar.update()
+            if isinstance(entry, BaseException):
+                failures.append((index, entry))
+            else:
+                yield index, read_entry(entry, configs[index])
     if failures:
         index, exc = min(failures, key=lambda failure: failure[0])
         others = f" ({len(failures) - 1} other run(s) failed too)" if len(failures) > 1 else ""
+        kept = f"; the finished runs are cached in {folder}, a rerun does only the rest" if folder else ""
         raise RuntimeError(f"run {index} of the sweep, {_describe(configs[index])}, failed{others}: "
-                           f"{type(exc).__name__}: {exc}" + (f"; the finished runs are cached in {folder}, "
-                                                              "a rerun does only the rest" if folder else "")
-                           ) from exc
+                           f"{type(exc).__name__}: {exc}{kept}") from exc
 
 
 def _cached(path, config):
