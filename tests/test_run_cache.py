@@ -28,6 +28,11 @@ def serial_build(tmp_path_factory):
     return build_calibration_table(cache=folder, **BUILD), folder
 
 
+def entries(folder):
+    """The finished entries (not the hidden temporary files of writes in progress or cut short)."""
+    return sorted(path for path in folder.glob("*.fits") if not path.name.startswith("."))
+
+
 def same_bits(first, second):
     return all(np.array_equal(np.asarray(first[c]), np.asarray(second[c]), equal_nan=True) for c in COLUMNS)
 
@@ -59,24 +64,23 @@ def test_the_key_is_the_whole_configuration_and_the_version(monkeypatch):
 
 def test_the_cache_recomputes_only_missing_entries_with_the_same_bits(tmp_path, serial_build, counted):
     serial_table, folder = serial_build
-    entries = sorted(folder.glob("*.fits"))
-    assert len(entries) == 4 and not list(folder.glob(".*"))  # no temporary left behind
-    entries = [shutil.copy2(path, tmp_path / path.name) for path in entries]
-    before = {path: (path.read_bytes(), path.stat().st_mtime_ns) for path in entries}
+    assert len(entries(folder)) == 4 and not list(folder.glob(".*"))  # no temporary left behind
+    copies = [shutil.copy2(path, tmp_path / path.name) for path in entries(folder)]
+    before = {path: (path.read_bytes(), path.stat().st_mtime_ns) for path in copies}
     # Built from the cache alone (read from the files, not from the runs): nothing simulated, the same bits.
     assert same_bits(build_calibration_table(cache=tmp_path, **BUILD), serial_table) and not counted
     # An interrupted build: one entry missing, one write cut short (its temporary file left behind),
     # and one entry damaged by hand (truncated), which is simulated again with a warning.
-    entries[2].unlink()
-    (tmp_path / f".{entries[1].name}.x.part.fits").write_bytes(before[entries[1]][0][:2880])
-    entries[0].write_bytes(before[entries[0]][0][:5000])
+    copies[2].unlink()
+    (tmp_path / f".{copies[1].name}.x.part.fits").write_bytes(before[copies[1]][0][:2880])
+    copies[0].write_bytes(before[copies[0]][0][:5000])
     with pytest.warns(UserWarning, match="ignoring the cache entry"):
         again = build_calibration_table(cache=tmp_path, **BUILD)
     assert same_bits(again, serial_table)
     assert sorted((c.latitude.to_value(u.deg), c.seed) for c in counted) == [(70, 1), (75, 1)]
     for path, (data, mtime) in before.items():
         assert path.read_bytes() == data  # the recomputed entries too: the same bits
-        assert path in (entries[0], entries[2]) or path.stat().st_mtime_ns == mtime  # the others untouched
+        assert path in (copies[0], copies[2]) or path.stat().st_mtime_ns == mtime  # the others untouched
 
 
 def test_a_failed_run_is_named_and_the_others_are_kept(tmp_path, monkeypatch):
@@ -116,17 +120,17 @@ def test_a_worker_killed_mid_build_then_a_rerun_gives_the_same_bits(tmp_path, se
         killed = None
         while builder.is_alive() and killed is None:
             busy = [worker for worker, keys in client.processing().items() if keys]
-            if busy and list(tmp_path.glob("*.fits")):  # one run done, another running: kill its worker
+            if busy and entries(tmp_path):  # one run done, another running: kill its worker
                 killed = client.run(os.getpid, workers=busy[:1])[busy[0]]
                 os.kill(killed, 9)
             time.sleep(0.05)
         builder.join()
         assert killed is not None, "the build ended before a worker could be killed"
-        done = {path: path.stat().st_mtime_ns for path in tmp_path.glob("*.fits")}
+        done = {path: path.stat().st_mtime_ns for path in entries(tmp_path)}
         rerun = build_calibration_table(cache=tmp_path, client=client, **BUILD)
     serial_table = serial_build[0]
     assert same_bits(rerun, serial_table)  # 2 workers, a restart: the serial table's bits
     if "table" in outcome:
         assert same_bits(outcome["table"], serial_table)
     assert all(path.stat().st_mtime_ns == mtime for path, mtime in done.items())  # only the missing reran
-    assert len(list(tmp_path.glob("*.fits"))) == 4
+    assert len(entries(tmp_path)) == 4
