@@ -14,7 +14,7 @@ from gongsynth.analysis.calibration_table import TABLE_LATITUDES, calibration_ta
 from gongsynth.analysis.weak_flux import weak_flux_factor
 from gongsynth.config import SimulationConfig
 from gongsynth.geometry import Pointing
-from gongsynth.pipeline import simulate_many
+from gongsynth.run_cache import cached_runs, run_config
 from gongsynth.version import version as __version__
 
 __all__ = ["PRESETS", "build_calibration_table"]
@@ -31,14 +31,20 @@ PRESETS = {
 
 def build_calibration_table(latitudes=TABLE_LATITUDES, seeds=(1, 2), *, regions=("quiet", "sunspot"),
                             config=None, preset="default", n_boot=50, client=None, workers=None,
-                            progress=True, input_sun=None, **simulate_kwargs):
+                            cache=None, progress=True, input_sun=None, **simulate_kwargs):
     """
     Simulate a latitude sweep and tabulate the papers' calibration curves and weak-flux factors.
 
-    Each latitude is simulated once per seed (the runs of one latitude are in
-    memory at a time); the seeds' pixels are pooled into one flux-conserving
-    fit per region (`gongsynth.analysis.weak_flux.weak_flux_factor`), whose
-    block bootstrap then includes the run-to-run variation.
+    Each latitude is simulated once per seed, each run one task
+    (`gongsynth.run_cache.cached_runs`: serially, or on any Dask cluster) that
+    keeps only the maps the fit needs; the seeds' pixels are pooled into one
+    flux-conserving fit per region (`gongsynth.analysis.weak_flux.weak_flux_factor`),
+    whose block bootstrap then includes the run-to-run variation.  A latitude
+    is fitted as soon as its runs are in, and they are dropped.  With
+    ``cache``, every finished run is kept on disk, so a build that was
+    interrupted (or lost a worker, or had a run fail) and is started again
+    simulates only what is missing; the table is the same bits whatever the
+    number of workers, the order the runs finish in, or the restarts.
 
     Parameters
     ----------
@@ -57,13 +63,17 @@ def build_calibration_table(latitudes=TABLE_LATITUDES, seeds=(1, 2), *, regions=
     n_boot : int
         Bootstrap resamples per fit.
     client : `dask.distributed.Client`, optional
-        Run each latitude's seeds on this Dask cluster
-        (`gongsynth.simulate_many`); the table is the same.
+        Run the simulations on this Dask cluster (a ``LocalCluster``, or an
+        HPC scheduler's through ``dask_jobqueue``); the table is the same.
     workers : int, optional
-        Without a client: a local Dask cluster of this many processes per
-        latitude (``None`` or 1: serial, no Dask needed).
+        Without a client: a local Dask cluster of this many processes
+        (``None`` or 1: serial, no Dask needed).
+    cache : path-like, optional
+        Folder of finished runs (one FITS file each, named by a hash of the
+        run's full configuration and the gongsynth version; see
+        `gongsynth.run_cache`); on a cluster, one every worker can write.
     progress : bool
-        A progress bar over the runs.
+        A progress bar over the runs (tqdm).
     input_sun : str, optional
         Description of the input Sun for the metadata; default the built-in photosphere.
     **simulate_kwargs
@@ -85,8 +95,6 @@ def build_calibration_table(latitudes=TABLE_LATITUDES, seeds=(1, 2), *, regions=
     >>> len(table), table.meta["seeds"]
     (1, [1])
     """
-    from tqdm.auto import tqdm
-
     latitudes = u.Quantity(latitudes, u.deg).ravel()
     seeds = [int(s) for s in seeds]
     if not seeds:
@@ -103,18 +111,21 @@ def build_calibration_table(latitudes=TABLE_LATITUDES, seeds=(1, 2), *, regions=
     if PRESETS[preset]:
         config = config.replace(instrument=config.instrument.replace(**PRESETS[preset]))
 
-    fits, mu = [], []
-    bar = tqdm(total=latitudes.size * len(seeds), disable=not progress, desc="calibration table")
-    for latitude in latitudes:
-        runs = simulate_many(latitudes=[latitude.to_value(u.deg)] * len(seeds) * u.deg, seeds=seeds,
-                             config=config, client=client, workers=workers, progress=False)
-        bar.update(len(seeds))
-        for region in regions:
-            fits.append(weak_flux_factor(runs, region=region, n_boot=n_boot))
-            mu.append(Pointing(latitude, config.obstime).mu)
-        del runs
-    bar.close()
-    return calibration_table(fits, mu=mu, metadata={
+    configs = [config.replace(latitude=latitude, seed=seed) for latitude in latitudes for seed in seeds]
+    # Each latitude is fitted as soon as all its seeds are in, and its runs dropped: the
+    # fits do not depend on the order the runs finish in.
+    pending = [dict() for _ in latitudes]
+    fits = [None] * latitudes.size
+    for index, run in cached_runs(configs, cache=cache, client=client, workers=workers, progress=progress,
+                                  desc="calibration table"):
+        group = pending[index // len(seeds)]
+        group[index % len(seeds)] = run
+        if len(group) == len(seeds):
+            runs = [group.pop(k) for k in range(len(seeds))]
+            fits[index // len(seeds)] = [weak_flux_factor(runs, region=region, n_boot=n_boot)
+                                         for region in regions]
+    mu = [Pointing(latitude, config.obstime).mu for latitude in latitudes for _ in regions]
+    return calibration_table([fit for group in fits for fit in group], mu=mu, metadata={
         "gongsynth_version": __version__,
         "input_sun": input_sun or (f"built-in Sun {config.sun!r} ({config.photosphere_shape[0]}^2 columns of "
                                    f"{config.photosphere_pixel_size})"),
@@ -123,6 +134,6 @@ def build_calibration_table(latitudes=TABLE_LATITUDES, seeds=(1, 2), *, regions=
         "estimator": "papers II/III: flux-conserving piecewise-linear truth = g(measured), "
                      "sign-symmetrised, weak-flux factor = dg/dmeasured at 0",
         "instrument": {k: str(v) for k, v in config.instrument.to_dict().items()},
-        "config": config.to_toml(),
+        "config": run_config(config).to_toml(),
         "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
     })

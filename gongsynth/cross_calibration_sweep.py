@@ -21,13 +21,9 @@ magnetogram with the other's (the factor to HMI's scale) and with its truth
 (the factor to the truth).
 """
 import datetime
-import hashlib
 import math
-from pathlib import Path
 
 import astropy.units as u
-import numpy as np
-import sunpy.map
 
 from gongsynth import instruments as family
 from gongsynth.analysis.calibration_table import TABLE_LATITUDES
@@ -35,7 +31,7 @@ from gongsynth.analysis.cross_calibration import DEFAULT_STRENGTH_BINS, cross_ca
 from gongsynth.analysis.cross_calibration_table import tabulate_cross_calibration
 from gongsynth.config import SimulationConfig
 from gongsynth.geometry import Pointing
-from gongsynth.pipeline import simulate_each
+from gongsynth.run_cache import cached_runs, run_config
 from gongsynth.version import version as __version__
 
 __all__ = ["CROSS_FIELD", "CROSS_RESOLUTION", "instrument_config", "simulate_instruments",
@@ -89,11 +85,7 @@ def instrument_config(instrument, latitude, seed, *, field=CROSS_FIELD, **simula
                                            **simulate_kwargs)
 
 
-def _cache_key(config):
-    return hashlib.sha256(config.to_toml(comments=False).encode()).hexdigest()[:16]
-
-
-def simulate_instruments(configs, *, cache=None, client=None, progress=True):
+def simulate_instruments(configs, *, cache=None, client=None, workers=None, progress=True):
     """
     Run configurations and keep only their magnetogram and pixel-averaged truth, cached on disk if asked.
 
@@ -101,57 +93,33 @@ def simulate_instruments(configs, *, cache=None, client=None, progress=True):
     ----------
     configs : sequence of `~gongsynth.config.SimulationConfig`
     cache : path-like, optional
-        Folder of finished runs (two FITS files each, named by a hash of the
-        full configuration): a rerun after an interruption only simulates
-        what is missing, and gives the same bits.
+        Folder of finished runs (`gongsynth.run_cache`: one FITS file each,
+        named by a hash of the full configuration and the gongsynth version): a
+        rerun after an interruption only simulates what is missing, and gives
+        the same bits.
     client : `dask.distributed.Client`, optional
         Run the missing simulations on this client.
+    workers : int, optional
+        Without a client: a local Dask cluster of this many processes (``None`` or 1: serially).
     progress : bool
 
     Returns
     -------
     list of (magnetogram, truth)
-        sunpy Maps in G, in the order of ``configs``.
+        sunpy Maps in G (float64), in the order of ``configs``.
     """
     configs = list(configs)
-    cache = None if cache is None else Path(cache)
     out = [None] * len(configs)
-    todo = []
-    for index, config in enumerate(configs):
-        paths = _cache_paths(cache, config)
-        if paths and all(p.exists() for p in paths):
-            out[index] = tuple(sunpy.map.Map(p) for p in paths)
-        else:
-            todo.append(index)
-    if cache is not None:
-        cache.mkdir(parents=True, exist_ok=True)
-    for position, result in simulate_each([configs[i] for i in todo], client=client, progress=progress):
-        index = todo[position]
-        if isinstance(result, BaseException):
-            config = configs[index]
-            raise RuntimeError(f"the {config.instrument.name} run at latitude {config.latitude}, "
-                               f"seed {config.seed} failed: {result}") from result
-        maps = (result.magnetogram, result.truth)
-        paths = _cache_paths(cache, configs[index])
-        for smap, path in zip(maps, paths or ()):
-            # float64 FITS: the cached map gives back the same bits.
-            sunpy.map.Map(np.asarray(smap.data, np.float64), smap.meta).save(path, overwrite=True)
-        out[index] = maps
+    for index, run in cached_runs(configs, cache=cache, client=client, workers=workers, progress=progress,
+                                  desc="cross-calibration runs"):
+        out[index] = (run.magnetogram, run.truth)
     return out
-
-
-def _cache_paths(cache, config):
-    if cache is None:
-        return None
-    stem = (f"{config.instrument.name}_lat{config.latitude.to_value(u.deg):g}_seed{config.seed}_"
-            f"{_cache_key(config)}")
-    return cache / f"{stem}_magnetogram.fits", cache / f"{stem}_truth.fits"
 
 
 def cross_calibration_table(instruments=("gong", "hmi"), latitudes=TABLE_LATITUDES, seeds=(1, 2), *,
                             resolution=CROSS_RESOLUTION, field=CROSS_FIELD,
-                            strength_bins=DEFAULT_STRENGTH_BINS, client=None, cache=None, progress=True,
-                            **simulate_kwargs):
+                            strength_bins=DEFAULT_STRENGTH_BINS, client=None, workers=None, cache=None,
+                            progress=True, **simulate_kwargs):
     """
     Simulate one Sun through several instruments and tabulate the factors between them and to the truth.
 
@@ -180,8 +148,11 @@ def cross_calibration_table(instruments=("gong", "hmi"), latitudes=TABLE_LATITUD
         Field-strength groups (G) of `cross_calibrate`.
     client : `dask.distributed.Client`, optional
         Run the simulations on this client; the table is the same.
+    workers : int, optional
+        Without a client: a local Dask cluster of this many processes.
     cache : path-like, optional
-        Keep each run's magnetogram and truth here (see `simulate_instruments`).
+        Keep each run's maps here (see `simulate_instruments`): a rerun
+        simulates only what is missing.
     progress : bool
     **simulate_kwargs
         Further `gongsynth.simulate` arguments for every run (e.g. ``sun``).
@@ -200,7 +171,8 @@ def cross_calibration_table(instruments=("gong", "hmi"), latitudes=TABLE_LATITUD
         raise ValueError("latitudes and seeds must each hold at least one value")
     configs = [instrument_config(name, latitude, seed, field=field, **simulate_kwargs)
                for latitude in latitudes for seed in seeds for name in names]
-    maps = iter(simulate_instruments(configs, cache=cache, client=client, progress=progress))
+    maps = iter(simulate_instruments(configs, cache=cache, client=client, workers=workers,
+                                     progress=progress))
     kwargs = dict(resolution=resolution, angle_bins=[0, 90] * u.deg, strength_bins=strength_bins)
     comparisons = []
     for latitude in latitudes:
@@ -228,6 +200,7 @@ def cross_calibration_table(instruments=("gong", "hmi"), latitudes=TABLE_LATITUD
                   "OLS-bisector slope of the "
                   "target against the source (target = factor x source; Isobe et al. 1990), mean over seeds; "
                   "uncertainty = standard error of the seeds' scatter",
-        "configs": {c.instrument.name: c.to_toml(comments=False) for c in configs[:len(names)]},  # first runs
+        "configs": {c.instrument.name: run_config(c).to_toml(comments=False)  # the first runs
+                    for c in configs[:len(names)]},
         "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
     })

@@ -9,6 +9,7 @@ random stream is derived from the run's seed and the stage name only.
 """
 import inspect
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 
 import astropy.units as u
@@ -492,7 +493,7 @@ def simulate_many(*, latitudes=(0, 25, 45, 60, 70, 75) * u.deg, seeds=None, conf
     return Sweep(results)
 
 
-def simulate_each(configs, *, stokes=None, client=None, workers=None, progress=True):
+def simulate_each(configs, *, stokes=None, client=None, workers=None, progress=True, task=None):
     """
     Run several configurations and yield each result as soon as it is done (to save it at once).
 
@@ -510,11 +511,14 @@ def simulate_each(configs, *, stokes=None, client=None, workers=None, progress=T
         Without a client: this many local Dask worker processes (``None`` or 1: serially).
     progress : bool
         A progress bar over the runs.
+    task : callable, optional
+        Run ``task(config=config)`` in place of `simulate` (e.g. `gongsynth.run_cache.run_entry`,
+        which keeps only what a table needs); on a cluster it must be picklable.
 
     Yields
     ------
     (int, `SimulationResult` or Exception)
-        The run's index in ``configs`` and its result, in the order the runs finish.
+        The run's index in ``configs`` and its result (``task``'s), in the order the runs finish.
 
     Examples
     --------
@@ -529,11 +533,14 @@ def simulate_each(configs, *, stokes=None, client=None, workers=None, progress=T
     from tqdm.auto import tqdm
 
     configs = list(configs)
+    if task is not None and stokes is not None:
+        raise TypeError("pass either task or stokes, not both")
+    run = partial(simulate, stokes, progress=False) if task is None else task  # run(config=...)
     bar = tqdm(total=len(configs), disable=not progress, desc="sweep")
     if stokes is not None or (client is None and (workers is None or workers <= 1)):
         for index, config in enumerate(configs):
             try:
-                result = simulate(stokes, config=config, progress=False)
+                result = run(config=config)
             except Exception as exc:  # noqa: BLE001 - reported with its run; Ctrl-C still stops the sweep
                 result = exc
             bar.update()
@@ -547,8 +554,7 @@ def simulate_each(configs, *, stokes=None, client=None, workers=None, progress=T
                                            dashboard_address=None)
         client = distributed.Client(cluster)
     try:
-        futures = {client.submit(simulate, config=c, progress=False, pure=False): i
-                   for i, c in enumerate(configs)}
+        futures = {client.submit(run, config=c, pure=False): i for i, c in enumerate(configs)}
         for future in distributed.as_completed(futures):
             bar.update()
             yield futures[future], (future.exception() if future.status == "error" else future.result())

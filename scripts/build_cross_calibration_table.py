@@ -19,9 +19,10 @@ machine)::
 
     python scripts/build_cross_calibration_table.py --overwrite [--cache DIR]
 
-``--cache DIR`` keeps every run's magnetogram and truth (float64 FITS named
-by a hash of the run's configuration), so an interrupted build resumes where
-it stopped, with the same bits.  Same gongsynth version, same seeds: the same
+``--cache DIR`` keeps every run's maps (one float64 FITS file per run named
+by a hash of the run's configuration and the gongsynth version:
+`gongsynth.run_cache`), so an interrupted build resumes where it stopped,
+with the same bits.  Same gongsynth version, same seeds: the same
 numbers, bit for bit (only the ``created`` date in the metadata differs).
 """
 import argparse

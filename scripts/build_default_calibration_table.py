@@ -14,7 +14,12 @@ How to regenerate it (about 15 minutes on 2 cores)::
     python scripts/build_default_calibration_table.py --overwrite
 
 Same gongsynth version, same seeds: the same numbers, bit for bit (only the
-``created`` date in the metadata differs).  ``--sun milne-eddington`` builds
+``created`` date in the metadata differs), whatever the number of workers.
+``--cache DIR`` keeps every run (one FITS file each, `gongsynth.run_cache`):
+started again after an interruption, the build simulates only what is
+missing.  ``--workers N`` runs N local Dask processes; ``--scheduler ADDRESS``
+(or a scheduler file) runs on a cluster already started, e.g. by dask-jobqueue
+(see the calibration guide; the cache must then be on a shared file system).  ``--sun milne-eddington`` builds
 the table of the Milne-Eddington toy Sun instead (the table shipped before the
 3-D Sun became the default).
 """
@@ -37,8 +42,18 @@ def main(argv=None):
                         default=Path(__file__).resolve().parents[1] / "gongsynth" / "data" / DEFAULT_TABLE)
     parser.add_argument("--overwrite", action="store_true")
     parser.add_argument("--sun", choices=("model-atmosphere", "milne-eddington"), default="model-atmosphere")
+    parser.add_argument("--cache", type=Path, help="folder of the finished runs (resumable build)")
+    parser.add_argument("--workers", type=int, help="local Dask worker processes")
+    parser.add_argument("--scheduler", help="address or scheduler file of a running Dask cluster")
     args = parser.parse_args(argv)
-    table = build_calibration_table(TABLE_LATITUDES, seeds=SEEDS, n_boot=50, progress=True, sun=args.sun)
+    client = None
+    if args.scheduler:
+        from dask.distributed import Client
+
+        client = (Client(scheduler_file=args.scheduler) if Path(args.scheduler).is_file()
+                  else Client(args.scheduler))
+    table = build_calibration_table(TABLE_LATITUDES, seeds=SEEDS, n_boot=50, progress=True, sun=args.sun,
+                                    cache=args.cache, workers=args.workers, client=client)
     # An editable install's version string does not follow later commits: record the commit too.
     here = Path(__file__).resolve().parent
     commit = subprocess.run(["git", "describe", "--always", "--dirty"], cwd=here, capture_output=True,

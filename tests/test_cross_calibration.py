@@ -246,18 +246,19 @@ def test_the_table_builder_compares_every_pair_and_caches_the_runs(tmp_path, mon
     from types import SimpleNamespace
 
     import gongsynth.cross_calibration_sweep as sweep
+    import gongsynth.run_cache as run_cache
 
     truth = _field((64, 64), seed=5, smooth=5)
     seen = {"gong": 1.5, "hmi": 1.2}
     calls = []
 
-    def fake_runs(configs, client=None, progress=True):
-        for index, config in enumerate(configs):
-            calls.append(config.instrument.name)
-            yield index, SimpleNamespace(magnetogram=_disk_map(truth / seen[config.instrument.name], 2.5),
-                                         truth=_disk_map(truth, 2.5))
+    def fake_run(*, config, progress):
+        calls.append(config.instrument.name)
+        maps = {"magnetogram": truth / seen[config.instrument.name], "truth": truth}
+        return SimpleNamespace(**{name: _disk_map(maps.get(name, truth), 2.5) for name in run_cache.RUN_MAPS},
+                               resolution_map=np.ones(truth.shape))
 
-    monkeypatch.setattr(sweep, "simulate_each", fake_runs)
+    monkeypatch.setattr(run_cache, "simulate", fake_run)
     kwargs = dict(latitudes=[0] * u.deg, seeds=[1], resolution=10 * u.arcsec, strength_bins=[0, np.inf] * u.G,
                   sun="milne-eddington", cache=tmp_path, progress=False)
     table = sweep.cross_calibration_table(**kwargs)

@@ -41,7 +41,7 @@ LAYERS = (
     ("gongsynth.products",),
     ("gongsynth.analysis",),
     ("gongsynth.suns", "gongsynth.config", "gongsynth.chain", "gongsynth.resources", "gongsynth.pipeline",
-     "gongsynth.calibration_sweep", "gongsynth.cross_calibration_sweep"),
+     "gongsynth.run_cache", "gongsynth.calibration_sweep", "gongsynth.cross_calibration_sweep"),
     ("gongsynth.cli",),
 )
 
