@@ -15,7 +15,8 @@ Times, in one process (ratios, not absolute times: the machines are shared):
    in fresh processes, with an empty and with a filled library cache, and
    their peak resident memory;
 4. with ``--rt``: the 3-D Sun's library (`build_atmosphere_library`, the
-   defaults: minutes), against the Milne-Eddington build of step 2.
+   defaults: GONG's 768 km grid, ~10-30 s; the full disk's default Sun),
+   against the Milne-Eddington build of step 2.
 
     python benchmarks/bench_fulldisk.py [--quick] [--runs] [--rt]
 """
@@ -60,7 +61,7 @@ def main():
     parser.add_argument("--quick", action="store_true",
                         help="old path on 400 rows through the centre, extrapolated")
     parser.add_argument("--runs", action="store_true", help="also time whole runs in fresh processes")
-    parser.add_argument("--rt", action="store_true", help="also build the 3-D Sun's library (minutes)")
+    parser.add_argument("--rt", action="store_true", help="also build the 3-D Sun's library (~10-30 s)")
     args = parser.parse_args()
 
     import gongsynth

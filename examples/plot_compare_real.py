@@ -104,9 +104,10 @@ print(type(gong_format).__name__, gong_format.unit, f"quiet-Sun noise {sigma:.2f
 # The simulated GONG magnetogram
 # ------------------------------
 #
-# gongsynth maps its periodic model photosphere (98 Mm tiles, each with a
-# sunspot, plage, network and granulation) over the visible hemisphere and
-# synthesises every point at its own viewing angle.  A one-minute
+# gongsynth fills the large-scale field of the date (the seeded synthetic
+# Sun, with its supergranular network) with patches of its 3-D model Sun,
+# quiet Sun to plage and sunspot columns, each point seen at its own viewing
+# angle (the full disk's patch library).  A one-minute
 # magnetogram, as GONG takes them; ``supersampling=2`` keeps this example
 # quick (the default 5 changes the field by ~10 G rms, see
 # `~gongsynth.stages.scene.fulldisk.full_disk_scene`).
@@ -121,9 +122,8 @@ sim = gongsynth.simulate(mode="full-disk", duration=1 * u.min, seed=2, progress=
 # `~gongsynth.compare.compare` measures both maps the same way: the maps on
 # a ±150 G grey scale with the noise boxes marked (the quietest in yellow), the
 # noise per box, the on-disk histograms of B and of |B| on log axes, and a table
-# of the numbers.  The model Sun carries a sunspot in every 98 Mm tile, so its
-# histogram wings are far wider than the real Sun's on a quiet day: the model
-# is a calibration target, not a forecast of the solar cycle.
+# of the numbers.  The synthetic Sun is seeded for its date, not observed: its
+# active regions are not the real Sun's of that day.
 
 report = compare(sim, mdi, labels=("gongsynth full disk", "MDI at GONG resolution"),
                  fig=plt.figure(figsize=(13, 8)), statistics=False)

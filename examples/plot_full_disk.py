@@ -6,8 +6,9 @@ A synthetic full-disk GONG map
 The paper avoided mapping its simulation onto the sphere.  `gongsynth.stages.scene.fulldisk`
 does it: every supersampled point of GONG's 860 × 860 field is traced to the
 solar surface and gets its own viewing angle μ; the Sun's large-scale field
-there picks the small scales from a library of built-in photosphere patches
-(quiet Sun to plage, synthesised once at 11 viewing angles), laid in surface
+there picks the small scales from a library of patches of the built-in 3-D
+Sun (quiet Sun to plage and sunspot columns, synthesised once by LTE radiative
+transfer at 7 viewing angles, on columns of 768 km: half a GONG pixel), laid in surface
 cells with their own offsets and turns, and every spectrum is Doppler
 shifted by the Sun's rotation, the observer's motion and the convective
 blueshift.  The result is a full-disk scene that can stand beside a real GONG
@@ -15,7 +16,7 @@ magnetogram.
 
 To run in seconds this example uses ``supersampling=1`` (one sample per
 pixel); the default is 5 × 5 samples per pixel.  The library is built once
-(~15 s) and cached.
+(~10-30 s on 2 cores) and cached.
 """
 import astropy.units as u
 import matplotlib.pyplot as plt
@@ -36,7 +37,7 @@ from gongsynth.sun.surface_field import synthetic_surface_field
 # maximum of cycle 24.
 
 gong = GONGInstrument()
-library = cached_library(seed=LIBRARY_SEED, instrument=gong)
+library = cached_library(seed=LIBRARY_SEED, instrument=gong, sun="model-atmosphere")
 print(library)
 date = "2014-04-01T18:00"
 field = synthetic_surface_field(date, seed=3)
@@ -77,7 +78,7 @@ for i, (smap, kwargs, title) in enumerate([
 # --------------
 #
 # Each point is seen at its own μ, so the continuum falls toward the limb as
-# the measured limb darkening prescribes.  The counts of a channel plane are
+# the radiative transfer of the 3-D Sun gives it.  The counts of a channel plane are
 # plotted against μ of the pixel centre; the spread at each μ is granulation,
 # the darker spots and the Doppler shifts moving the line in the passband.
 

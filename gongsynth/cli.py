@@ -140,8 +140,8 @@ def build_parser():
                      help="parallel workers: threads for one run, Dask workers for a sweep")
     sim.add_argument("--sun", choices=tuple(SUNS),
                      help="the built-in Sun: the 3-D model atmosphere through LTE radiative transfer "
-                          "(default in tiled mode) or Milne-Eddington columns (fast, a toy for calibration; "
-                          "the default over the full disk)")
+                          "(the default; over the full disk its patch library, built once and cached) or "
+                          "Milne-Eddington columns (fast, a toy for calibration)")
     sim.add_argument("--atmosphere", type=Path, metavar="PATH",
                      help="a model atmosphere as the input Sun, synthesised by LTE radiative transfer: "
                           "a MURaM snapshot folder, a gongsynth or ART HDF5 file (.h5), or a 1-D model "

@@ -286,7 +286,7 @@ class SimulationConfig:
     sun : str or None
         The built-in Sun (a key of `SUNS`): ``"model-atmosphere"`` (the 3-D
         model atmosphere through LTE radiative transfer; over the full disk
-        its patch library takes minutes to build once, then is cached) or
+        its patch library takes ~10-30 s to build once, then is cached) or
         ``"milne-eddington"`` (the column photosphere: fast, one line strength
         everywhere, a toy for calibration).  None (default): the mode's
         default, `default_sun` (recorded).

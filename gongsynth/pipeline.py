@@ -193,11 +193,11 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=None, engine="blocks",
     sun : {"model-atmosphere", "milne-eddington"}, optional
         The built-in Sun (used when ``stokes`` is None): the 3-D model
         atmosphere (`gongsynth.sun.model_atmosphere.model_atmosphere`) through
-        LTE radiative transfer along the rays at ``latitude`` (tiled mode
-        only), or the column photosphere through Milne-Eddington synthesis
-        (fast; one line strength everywhere, a toy for calibration).
-        Default: the 3-D model in tiled mode, the columns over the full disk
-        (`gongsynth.suns.default_sun`).
+        LTE radiative transfer along the rays at ``latitude`` (over the full
+        disk its patch library, `gongsynth.stages.scene.library_rt`), or the
+        column photosphere through Milne-Eddington synthesis (fast; one line
+        strength everywhere, a toy for calibration).  Default: the 3-D model
+        in both modes (`gongsynth.suns.default_sun`).
     photosphere_shape : tuple of int, optional
         Columns of the built-in Sun (default: 1024 × 1024 for
         ``"milne-eddington"``, the model atmosphere's own default otherwise).

@@ -25,11 +25,12 @@ SUNS = {"milne-eddington": model_photosphere, "model-atmosphere": model_atmosphe
 #: box of 96 km columns, too small for a spot, gives 1.06 / 0.69.
 RUN_GRIDS = {"model-atmosphere": {"shape": (256, 256), "pixel_size": 384 * u.km}}
 
-#: The built-in Sun of each scene mode when none is named.  The full disk keeps the Milne-Eddington
-#: columns: its patch library builds in ~6 s, within the first run's 20 s budget, while the 3-D Sun's
-#: (``sun = "model-atmosphere"``, `gongsynth.stages.scene.library_rt`) takes minutes by radiative
-#: transfer (once per machine: it is cached), which that budget cannot hold.
-DEFAULT_SUNS = {"tiled": "model-atmosphere", "full-disk": "milne-eddington"}
+#: The built-in Sun of each scene mode when none is named: the 3-D model atmosphere in both, so that
+#: the tiled and full-disk modes show the same Sun.  Over the full disk its patch library
+#: (`gongsynth.stages.scene.library_rt`, on the grid the instrument's pixels need:
+#: `~gongsynth.stages.scene.library_rt.atmosphere_grid`) builds once per machine in ~10-30 s and is
+#: cached; ``sun = "milne-eddington"`` keeps the fast toy columns (~6 s).
+DEFAULT_SUNS = {"tiled": "model-atmosphere", "full-disk": "model-atmosphere"}
 
 #: Arguments of the built-in Suns set by [simulation] instead of [photosphere].
 PHOTOSPHERE_RUN_KEYS = ("shape", "pixel_size", "seed")
@@ -38,8 +39,7 @@ PHOTOSPHERE_RUN_KEYS = ("shape", "pixel_size", "seed")
 def default_sun(mode="tiled"):
     """
     The built-in Sun a run uses when none is named: the 3-D model atmosphere in
-    tiled mode; the Milne-Eddington columns over the full disk (the 3-D Sun's
-    patch library takes minutes to build; name it to use it).
+    every mode (`DEFAULT_SUNS`; over the full disk, its cached patch library).
 
     Parameters
     ----------
@@ -54,7 +54,7 @@ def default_sun(mode="tiled"):
     Examples
     --------
     >>> default_sun(), default_sun("full-disk")
-    ('model-atmosphere', 'milne-eddington')
+    ('model-atmosphere', 'model-atmosphere')
     """
     if mode not in DEFAULT_SUNS:
         raise ValueError(f"mode must be one of {tuple(DEFAULT_SUNS)}, got {mode!r}")

@@ -71,7 +71,7 @@ def test_flat_record_needs_both_path_and_digest():
 
 def test_the_built_in_sun_and_its_defaults():
     """Shape and spacing default to the chosen Sun's builder; a change of Sun moves them along; the
-    default Sun is the 3-D model in tiled mode and the columns over the full disk, and follows the mode."""
+    default Sun is the 3-D model in both modes, and a chosen Sun stays when the mode changes."""
     from gongsynth.suns import RUN_GRIDS, SUNS, photosphere_defaults
     default = SimulationConfig(seed=1)
     assert default.sun == "model-atmosphere"
@@ -79,13 +79,13 @@ def test_the_built_in_sun_and_its_defaults():
     assert me.sun == "milne-eddington" and me.photosphere_shape == (1024, 1024)
     assert me.replace(sun="model-atmosphere") == default
     disk = default.replace(mode="full-disk")
-    assert disk.sun == "milne-eddington" and disk.photosphere_shape == (1024, 1024)
+    assert disk.sun == "model-atmosphere" and disk.photosphere_shape == (256, 256)
     assert disk.replace(mode="tiled") == default
     assert SimulationConfig(seed=1, mode="full-disk") == disk
     assert SimulationConfig.from_toml(disk.to_toml()) == disk
-    # The 3-D Sun over the full disk is a choice, not the default (its library takes minutes).
-    chosen = SimulationConfig(sun="model-atmosphere", mode="full-disk")
-    assert chosen.replace(mode="tiled").sun == "model-atmosphere"
+    # The Milne-Eddington toy over the full disk is a choice; it stays through a change of mode.
+    chosen = SimulationConfig(sun="milne-eddington", mode="full-disk")
+    assert chosen.replace(mode="tiled").sun == "milne-eddington"
     atm = me.replace(sun="model-atmosphere")
     assert atm.photosphere_shape == RUN_GRIDS["model-atmosphere"]["shape"] == (256, 256)
     assert atm.photosphere_pixel_size == RUN_GRIDS["model-atmosphere"]["pixel_size"]

@@ -368,8 +368,8 @@ def test_a_full_disk_run_follows_the_synthetic_sun_of_its_date():
 
     # 10″ pixels of 5 × 5 samples: point sampling of the 384 km patch columns averages out.
     coarse = GONGInstrument(plate_scale=10 * u.arcsec, detector_shape=200, supersampling=5)
-    config = SimulationConfig(mode="full-disk", instrument=coarse, seed=4, duration=1 * u.min,
-                              obstime="2014-04-01T18:00:00", site="BB")
+    config = SimulationConfig(mode="full-disk", sun="milne-eddington", instrument=coarse, seed=4,
+                              duration=1 * u.min, obstime="2014-04-01T18:00:00", site="BB")
     assert config.surface_field == "synthetic"
     assert SimulationConfig.from_toml(config.to_toml()) == config
     result = gongsynth.simulate(config=config, progress=False)

@@ -17,8 +17,14 @@ from gongsynth.config import SimulationConfig
 from gongsynth.seeding import as_seed_sequence, child_sequence
 from gongsynth.stages.scene import library as library_module
 from gongsynth.stages.scene.disk_render import library_scene
+from gongsynth.stages.scene.fulldisk import DEFAULT_CELL
 from gongsynth.stages.scene.library import cached_library
-from gongsynth.stages.scene.library_rt import STRONG_COLUMNS, build_atmosphere_library
+from gongsynth.stages.scene.library_rt import (
+    STRONG_COLUMNS,
+    TILED_COLUMN,
+    atmosphere_grid,
+    build_atmosphere_library,
+)
 from gongsynth.sun.model_atmosphere import model_atmosphere
 from gongsynth.sun.rt import synthesize as rt_synthesize
 
@@ -95,13 +101,52 @@ def test_cached_and_reloaded_bit_identical_with_its_own_key(tmp_path, monkeypatc
         cached_library(sun="muram", **args)
 
 
+@pytest.mark.parametrize("scale", [0.504, 1.0, 2.5, 10.0, 25.0])
+def test_the_default_grid_follows_the_instruments_pixel(scale):
+    """Columns: multiples of the tiled run's 384 km, within half a disk-centre pixel (or 384 km); one cell."""
+    shape, column = atmosphere_grid(GONGInstrument(plate_scale=scale * u.arcsec))
+    pixel_km = scale * 725.0 * (1 - 1 / 215)     # 1″ ≈ 725 km at 1 au, the disk's centre 1 R_sun nearer
+    steps = (column / TILED_COLUMN).to_value(u.one)
+    assert steps == round(steps) >= 1 and shape[0] == shape[1] >= 8
+    assert column.to_value(u.km) <= max(0.5 * pixel_km, TILED_COLUMN.to_value(u.km))
+    assert column.to_value(u.km) + TILED_COLUMN.to_value(u.km) > 0.5 * pixel_km    # the largest such
+    assert shape[0] * column >= DEFAULT_CELL
+
+
+def test_the_default_grid_is_in_the_cache_key(tmp_path, monkeypatch, tiny_library):
+    """Plate scale is not in the instrument's key, but the 3-D grid it sets is: a new grid, a new entry."""
+    import gongsynth.stages.scene.library_rt as library_rt
+
+    monkeypatch.setenv("GONGSYNTH_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(library_module, "_MEMO", {})
+    grids = []
+
+    def record(**arguments):            # the builder is tested above: here only what it is given
+        grids.append((arguments["shape"], arguments["pixel_size"]))
+        return tiny_library
+
+    monkeypatch.setattr(library_rt, "build_atmosphere_library", record)
+    args = dict(theta=(0.0, 60.0), knobs={"nz": 40}, seed=3)
+    coarse = GONGInstrument(plate_scale=25 * u.arcsec)
+    first = cached_library(sun="model-atmosphere", instrument=coarse, **args)
+    assert grids == [atmosphere_grid(coarse)]
+    near = GONGInstrument(plate_scale=25.2 * u.arcsec)
+    same = cached_library(sun="model-atmosphere", instrument=near, **args)
+    assert same is first and len(list(tmp_path.iterdir())) == 1 and len(grids) == 1
+    cached_library(sun="model-atmosphere", instrument=GONGInstrument(plate_scale=30 * u.arcsec), **args)
+    assert len(list(tmp_path.iterdir())) == 2 and grids[1][1] > grids[0][1]
+    # A grid given explicitly is the builder's, whatever the instrument's pixel.
+    cached_library(sun="model-atmosphere", instrument=coarse, shape=(8, 8), pixel_size=3 * u.Mm, **args)
+    assert grids[2] == ((8, 8), 3 * u.Mm)
+
+
 def test_the_scene_leaves_out_the_tabulated_blueshift(tiny_library):
     light, _ = library_scene(tiny_library, instrument=WHOLE, detector_shape=100, supersampling=1)
     assert light.meta["velocities"] == {"rotation": True, "observer": True, "blueshift": False}
 
 
 def test_a_full_disk_run_of_the_3d_sun_repeats_by_seed(tmp_path, monkeypatch):
-    """The chain takes sun = 'model-atmosphere' in full-disk mode (a tiny library); same seed, same map."""
+    """The full disk's default Sun is the 3-D one (a tiny library here); same seed, same map."""
     monkeypatch.setenv("GONGSYNTH_CACHE_DIR", str(tmp_path))
     monkeypatch.setattr(library_module, "_MEMO", {})
     calls = []
@@ -112,8 +157,8 @@ def test_a_full_disk_run_of_the_3d_sun_repeats_by_seed(tmp_path, monkeypatch):
 
     monkeypatch.setattr(chain_module, "cached_library", tiny)
     coarse = GONGInstrument(plate_scale=20 * u.arcsec, detector_shape=100, supersampling=2)
-    config = SimulationConfig(mode="full-disk", sun="model-atmosphere", instrument=coarse, seed=5,
-                              duration=1 * u.min, photosphere={"nz": 40})
+    config = SimulationConfig(mode="full-disk", instrument=coarse, seed=5, duration=1 * u.min,
+                              photosphere={"nz": 40})
     first = gongsynth.simulate(config=config, progress=False)
     again = gongsynth.simulate(config=first.config, progress=False)
     other = gongsynth.simulate(config=config.replace(seed=6), progress=False)

@@ -185,7 +185,8 @@ def test_bad_arguments():
 
 def test_full_disk_mode_blanks_the_sky_and_follows_the_truth():
     coarse = gongsynth.GONGInstrument(plate_scale=25 * u.arcsec, detector_shape=86, supersampling=2)
-    result = gongsynth.simulate(mode="full-disk", instrument=coarse, seed=4, duration=1 * u.min,
+    result = gongsynth.simulate(mode="full-disk", sun="milne-eddington", instrument=coarse, seed=4,
+                                duration=1 * u.min,
                                 photosphere_shape=(256, 256), photosphere_pixel_size=384 * u.km,
                                 progress=False)
     b = result.magnetogram

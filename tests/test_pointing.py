@@ -71,7 +71,8 @@ def test_a_pointed_run_puts_the_sun_where_its_maps_say():
     """The whole chain: products blanked beyond the moved limb; their WCS puts (0, 0) on the disk's centre."""
     import gongsynth
     coarse = GONGInstrument(plate_scale=10 * u.arcsec, detector_shape=240, supersampling=3)
-    config = SimulationConfig(mode="full-disk", instrument=coarse, seed=4, duration=1 * u.min, obstime=DATE,
+    config = SimulationConfig(mode="full-disk", sun="milne-eddington", instrument=coarse, seed=4,
+                              duration=1 * u.min, obstime=DATE,
                               pointing=[150, -100] * u.arcsec)
     result = gongsynth.simulate(config=config, progress=False)
     rows, cols = np.nonzero(np.isfinite(result.magnetogram.data))

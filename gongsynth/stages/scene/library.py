@@ -31,7 +31,8 @@ offsets, rotations and mirrors per cell of the surface).
 
 This module builds the library of the Milne-Eddington Sun (`build_library`,
 ~6 s for the defaults on 2 cores); `gongsynth.stages.scene.library_rt` builds
-the same `PatchLibrary` from the 3-D Sun by radiative transfer (minutes).
+the same `PatchLibrary` from the 3-D Sun by radiative transfer (~10-30 s for
+GONG's full disk, on a grid its pixels need).
 `cached_library` builds either once per machine and keeps it on disk.
 """
 import dataclasses
@@ -59,6 +60,7 @@ from gongsynth.sun.photosphere import (
     me_line,
     model_photosphere,
 )
+from gongsynth.version import version
 
 __all__ = ["LEVELS", "STRONG_FIELDS", "DEFAULT_THETA", "LIBRARY_SEED", "PatchLibrary", "build_library",
            "cached_library", "cache_directory", "CacheWarning"]
@@ -409,6 +411,7 @@ def _key(arguments, sun):
     text = json.dumps({k: repr(v) for k, v in sorted(arguments.items())}, sort_keys=True)
     digest.update(text.encode())
     digest.update(np.__version__.encode())
+    digest.update(version.encode())
     return digest.hexdigest()[:24]
 
 
@@ -519,16 +522,19 @@ def cached_library(*, sun="milne-eddington", progress=False, **arguments):
     The patch library of a built-in Sun, built once per argument set and kept in memory and on disk.
 
     The disk copy (`cache_directory`; ~300 MB for the Milne-Eddington
-    defaults) is keyed by the Sun, the arguments and the source of every
-    module that shapes the numbers (so a code change builds a new one); the
-    patches are memory-mapped from it.
+    defaults, ~5 MB for GONG's 3-D library) is keyed by the Sun, the
+    arguments (the Sun's knobs, the instrument's line and filters, and for the
+    3-D Sun the patch grid `~gongsynth.stages.scene.library_rt.atmosphere_grid`
+    gives its pixels), gongsynth's version and the source of every module
+    that shapes the numbers (so a code change builds a new one); the patches
+    are memory-mapped from it.
 
     Parameters
     ----------
     sun : {"milne-eddington", "model-atmosphere"}, optional
         `build_library` (Milne-Eddington columns, seconds) or
         `gongsynth.stages.scene.library_rt.build_atmosphere_library` (the 3-D
-        Sun by radiative transfer, minutes).
+        Sun by radiative transfer, ~10-30 s for GONG's full disk).
     progress : bool, optional
         A progress bar while the 3-D library builds (not part of the key).
     **arguments
@@ -549,7 +555,11 @@ def cached_library(*, sun="milne-eddington", progress=False, **arguments):
         def build():
             return build_library(**arguments)
     elif sun == "model-atmosphere":
-        from gongsynth.stages.scene.library_rt import build_atmosphere_library
+        from gongsynth.stages.scene.library_rt import atmosphere_grid, build_atmosphere_library
+
+        # The default grid follows the instrument's pixel (not in the instrument's key): into the key.
+        shape, pixel_size = atmosphere_grid(arguments.get("instrument"))
+        arguments = {"shape": shape, "pixel_size": pixel_size, **arguments}
 
         def build():
             return build_atmosphere_library(progress=progress, **arguments)

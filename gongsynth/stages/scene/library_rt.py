@@ -42,10 +42,21 @@ The spectra of the 3-D Sun carry their own granular flows, hence their own
 convective blueshift; the renderer leaves out the tabulated one for such a
 library (``meta["spectra_carry_blueshift"]``).
 
-Cost: ~200 µs per column and angle on 2 cores (the equation of state along
-every ray dominates), so the default (4 patches of 128² columns of 384 km
-and 7 angles, `ATMOSPHERE_THETA`) takes ~2 minutes; it is cached like the
+Cost: ~200-400 µs per column and angle on 2 cores (the equation of state
+along every ray dominates).  The full disk does not need the tiled run's
+columns everywhere: its default grid (`atmosphere_grid`) takes columns of
+the tiled run's 384 km, coarsened to at most half the instrument's pixel at
+disk centre (GONG's 2.5″ pixels: 768 km; HMI's 0.5″: 384 km), and patches
+of one surface cell (`gongsynth.stages.scene.fulldisk.DEFAULT_CELL`, 30 Mm:
+40² columns for GONG, 79² for HMI).  GONG's default (4 patches × 1600
+columns × 7 angles) takes ~10-30 s here, once: it is cached like the
 Milne-Eddington library (`gongsynth.stages.scene.library.cached_library`).
+The coarser columns are point samples of the same seeded statistical
+atmosphere (its granulation, elements and internetwork are drawn on the
+grid): a GONG pixel averages ~5 of them instead of ~22 at 384 km, and
+kG elements narrower than a column enter as filling factors, as they do in
+a tiled run's 384 km columns; the validation
+(``benchmarks/validate_library_rt.py``) compares them with 384 km columns.
 """
 import inspect
 
@@ -54,6 +65,7 @@ import numpy as np
 
 from gongsynth import instruments
 from gongsynth.seeding import as_seed_sequence, child_sequence
+from gongsynth.stages.scene.fulldisk import DEFAULT_CELL
 from gongsynth.stages.scene.library import LEVELS, PatchLibrary
 from gongsynth.stages.scene.library_layout import library_layout
 from gongsynth.sun.atmosphere import Atmosphere
@@ -63,7 +75,7 @@ from gongsynth.sun.photosphere import me_line
 from gongsynth.sun.rt import default_wavelength, get_line
 from gongsynth.sun.rt import synthesize as rt_synthesize
 
-__all__ = ["ATMOSPHERE_LEVELS", "STRONG_COLUMNS", "ATMOSPHERE_THETA", "ATMOSPHERE_SHAPE",
+__all__ = ["ATMOSPHERE_LEVELS", "STRONG_COLUMNS", "ATMOSPHERE_THETA", "TILED_COLUMN", "atmosphere_grid",
            "build_atmosphere_library"]
 
 
@@ -85,8 +97,11 @@ STRONG_COLUMNS = (("penumbra", "penumbra_field"), ("umbra", "umbra_field"))
 #: Default viewing angles (deg) of the 3-D library: every 15° in μ-spacing to 76°, then toward the limb.
 ATMOSPHERE_THETA = (0.0, 30.0, 48.0, 61.0, 72.0, 81.0, 87.0)
 
-#: Default columns of a 3-D patch (at 384 km: 49 Mm, larger than the renderer's 30 Mm cells).
-ATMOSPHERE_SHAPE = (128, 128)
+#: The column size of a tiled run's 3-D Sun (`gongsynth.suns.RUN_GRIDS`): the finest a library takes.
+TILED_COLUMN = 384 * u.km
+
+# Observer-to-disk-centre distance that turns a plate scale into km at disk centre: 1 au - R_sun.
+_KM_PER_ARCSEC = ((1 * u.au - 695700 * u.km) * (1 * u.arcsec).to_value(u.rad)).to_value(u.km)
 
 _FLOAT = np.float32
 _BUILDER = {name: p.default for name, p in inspect.signature(model_atmosphere).parameters.items()}
@@ -125,7 +140,42 @@ def _strong_column(kind, knobs):
     return atm, strength
 
 
-def build_atmosphere_library(*, seed=0, shape=ATMOSPHERE_SHAPE, pixel_size=384 * u.km,
+def atmosphere_grid(instrument=None, cell=DEFAULT_CELL):
+    """
+    The default patch grid of a 3-D library for an instrument: (shape, pixel_size).
+
+    Columns are the tiled run's `TILED_COLUMN` (384 km) times the largest
+    integer that keeps them within half the instrument's pixel at disk centre
+    (at least two columns per pixel and axis, so a pixel still averages
+    several granules and lanes); the patch holds one surface ``cell`` of the
+    full-disk renderer (30 Mm).
+
+    Parameters
+    ----------
+    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
+    cell : `~astropy.units.Quantity`, optional
+        Patch side to cover (default `gongsynth.stages.scene.fulldisk.DEFAULT_CELL`).
+
+    Returns
+    -------
+    shape : (int, int)
+    pixel_size : `~astropy.units.Quantity`
+        km.
+
+    Examples
+    --------
+    >>> atmosphere_grid("gong"), atmosphere_grid("hmi")
+    (((40, 40), <Quantity 768. km>), ((79, 79), <Quantity 384. km>))
+    """
+    inst = instruments.get(instrument)
+    pixel_km = inst.plate_scale.to_value(u.arcsec) * _KM_PER_ARCSEC
+    base = TILED_COLUMN.to_value(u.km)
+    column = base * max(1, int(0.5 * pixel_km // base))
+    n = max(8, int(np.ceil(cell.to_value(u.km) / column)))    # model_atmosphere's smallest box
+    return (n, n), column * u.km
+
+
+def build_atmosphere_library(*, seed=0, shape=None, pixel_size=None,
                              seeds_per_level=(1, 1, 1, 1), theta=ATMOSPHERE_THETA, knobs=None,
                              wavelength=None, mueller=None, instrument=None, max_velocity=4 * u.km / u.s,
                              levels=ATMOSPHERE_LEVELS, strong_columns=STRONG_COLUMNS, progress=False,
@@ -138,9 +188,9 @@ def build_atmosphere_library(*, seed=0, shape=ATMOSPHERE_SHAPE, pixel_size=384 *
     seed : int or `numpy.random.SeedSequence`, optional
         Root seed; patch *v* of level *k* uses the stream ``("library", k, v)``.
     shape : (int, int), optional
-        Columns of each patch (default `ATMOSPHERE_SHAPE`).
+        Columns of each patch (default: `atmosphere_grid` of the instrument).
     pixel_size : `~astropy.units.Quantity`, optional
-        Their size (default 384 km, about GONG's 0.5″ samples at disk centre).
+        Their size (default: `atmosphere_grid` of the instrument, 768 km for GONG).
     seeds_per_level : sequence of int, optional
         Patches (independent seeds) of each level of ``levels``.
     theta : sequence of float, optional
@@ -182,6 +232,9 @@ def build_atmosphere_library(*, seed=0, shape=ATMOSPHERE_SHAPE, pixel_size=384 *
     (6, (4, 8, 8, 2), True)
     """
     inst = instruments.get(instrument)
+    grid_shape, grid_pixel = atmosphere_grid(inst)
+    shape = grid_shape if shape is None else shape
+    pixel_size = grid_pixel if pixel_size is None else pixel_size
     rt_line = get_line(inst.line if line is None else line)
     line = me_line(inst.line)
     wavelength = default_wavelength(rt_line) if wavelength is None else wavelength
