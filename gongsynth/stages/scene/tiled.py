@@ -33,6 +33,7 @@ from gongsynth import instruments
 from gongsynth.geometry import Pointing, wcs_header
 from gongsynth.stages.channels import CHANNEL_UNIT
 from gongsynth.stages.scene.scene import DeferredStack, Scene, radiance_at_earth, sky_grid
+from gongsynth.threads import run_chunks
 from gongsynth.validation import check_finite, check_quantity
 
 __all__ = ["tile", "tiled_scenes", "check_tile_extent"]
@@ -103,24 +104,17 @@ def _sparse_row(indptr, indices, weights, first, narrow, out, r, row):
         out[r, c] = row[c]
 
 
-@numba.njit(cache=True)
-def _sparse_rows(indptr, indices, weights, first, narrow, out):
-    """`_sparse_row` for every row of ``out``, on one thread: for the optics' blocks of rows."""
+@numba.njit(cache=True, nogil=True)
+def _sparse_rows(start, stop, indptr, indices, weights, first, narrow, out):
+    """`_sparse_row` for rows ``start`` to ``stop`` of ``out`` (`~gongsynth.threads.run_chunks`)."""
     row = np.empty(out.shape[1])
-    for r in range(out.shape[0]):
+    for r in range(start, stop):
         _sparse_row(indptr, indices, weights, first, narrow, out, r, row)
 
 
-@numba.njit(parallel=True, cache=True)
-def _sparse_rows_parallel(indptr, indices, weights, first, narrow, out):
-    """`_sparse_row` for every row of ``out``, in parallel: for whole planes (few long calls)."""
-    for r in numba.prange(out.shape[0]):
-        _sparse_row(indptr, indices, weights, first, narrow, out, r, np.empty(out.shape[1]))
-
-
-# Below this many rows a call runs on one thread: the threads' start and join (and, on a
-# loaded machine, their waiting for each other) cost more than the work.
-_PARALLEL_ROWS = 1024
+# Fewest rows per thread: below, the threads' start and join (and, on a loaded machine, their
+# waiting for each other) cost more than the work (the optics' blocks of rows stay on one thread).
+_THREAD_ROWS = 512
 
 
 class _Tiler:
@@ -163,9 +157,8 @@ class _Tiler:
         for (rows, cols, opy, _), narrow in zip(self.regions, self._narrow_of(i)):
             lo, hi = max(start, rows.start), min(stop, rows.stop)
             if lo < hi:
-                kernel = _sparse_rows_parallel if hi - lo >= _PARALLEL_ROWS else _sparse_rows
-                kernel(opy.indptr, opy.indices, opy.data, lo - rows.start, narrow,
-                       out[lo - start:hi - start, cols])
+                run_chunks(_sparse_rows, hi - lo, opy.indptr, opy.indices, opy.data, lo - rows.start, narrow,
+                           out[lo - start:hi - start, cols], min_chunk=_THREAD_ROWS)
         return out
 
     def release(self):

@@ -45,6 +45,7 @@ from gongsynth.sun.model_atmosphere import stratification as st
 from gongsynth.sun.model_atmosphere.granulation import PeriodicGrid, anelastic_profile, granulation_pattern
 from gongsynth.sun.model_atmosphere.sunspot import spot_structure
 from gongsynth.sun.rt.eos import solve_state
+from gongsynth.threads import run_chunks
 from gongsynth.validation import check_quantity, check_scalar
 
 __all__ = ["model_atmosphere", "reference_stratifications", "GRANULATION_MODELS", "ELEMENT_MODELS",
@@ -137,12 +138,12 @@ def reference_stratifications(z_grid, granulation="brc", amplitude=1.0, element_
     return out
 
 
-@nb.njit(parallel=True, cache=True)
-def _blend(a, f, su, sp, a0, da, q_t, q_p, tube_t, tube_p, u_t, u_p, p_t, p_p, temp, pres):
-    """T and P per (height, column): area-weighted means of the components (see the module docstring)."""
+@nb.njit(cache=True, nogil=True)
+def _blend(start, stop, a, f, su, sp, a0, da, q_t, q_p, tube_t, tube_p, u_t, u_p, p_t, p_p, temp, pres):
+    """T and P per (height, column) of rows ``start`` to ``stop``: area-weighted means of the components."""
     na, nz = q_t.shape
-    ny, nx = a.shape
-    for j in nb.prange(ny):
+    nx = a.shape[1]
+    for j in range(start, stop):
         m = np.empty(nx, dtype=np.int64)
         w = np.empty(nx)
         q = np.empty(nx)
@@ -160,12 +161,12 @@ def _blend(a, f, su, sp, a0, da, q_t, q_p, tube_t, tube_p, u_t, u_p, p_t, p_p, t
                 pres[k, j, i] = q[i] * pq + f[j, i] * tube_p[k] + su[j, i] * u_p[k] + sp[j, i] * p_p[k]
 
 
-@nb.njit(parallel=True, cache=True)
-def _flow(h, s, fl, vz0, gx, gy, svx, svy, vel):
-    """v_z = h V, v_h = s ∇φ + (Evershed, moat) × their height profile."""
+@nb.njit(cache=True, nogil=True)
+def _flow(start, stop, h, s, fl, vz0, gx, gy, svx, svy, vel):
+    """v_z = h V, v_h = s ∇φ + (Evershed, moat) × their height profile, rows ``start`` to ``stop``."""
     nz = h.size
-    ny, nx = vz0.shape
-    for j in nb.prange(ny):
+    nx = vz0.shape[1]
+    for j in range(start, stop):
         for k in range(nz):
             for i in range(nx):
                 vel[0, k, j, i] = s[k] * gx[j, i] + fl[k] * svx[j, i]
@@ -173,12 +174,12 @@ def _flow(h, s, fl, vz0, gx, gy, svx, svy, vel):
                 vel[2, k, j, i] = h[k] * vz0[j, i]
 
 
-@nb.njit(parallel=True, cache=True)
-def _add_internetwork(c, dc, ax, ay, dazdx, dazdy, curl, mag):
-    """B += curl of A c(z) (see `~gongsynth.sun.model_atmosphere.flux_elements`)."""
+@nb.njit(cache=True, nogil=True)
+def _add_internetwork(start, stop, c, dc, ax, ay, dazdx, dazdy, curl, mag):
+    """B += curl of A c(z) in rows ``start`` to ``stop`` (`~gongsynth.sun.model_atmosphere.flux_elements`)."""
     nz = c.size
-    ny, nx = ax.shape
-    for j in nb.prange(ny):
+    nx = ax.shape[1]
+    for j in range(start, stop):
         for k in range(nz):
             for i in range(nx):
                 mag[0, k, j, i] += c[k] * dazdy[j, i] - dc[k] * ay[j, i]
@@ -377,9 +378,10 @@ def model_atmosphere(shape=(1024, 1024), pixel_size=96 * u.km, *, seed, nz=80,
     temp = np.empty((zg.size, ny, nx), dtype=np.float32)
     pres = np.empty_like(temp)
     a_clip = np.clip(a, _A_TABLE[0], _A_TABLE[-1])
-    _blend(a_clip, f_el, sp["umbra"], sp["penumbra"], float(_A_TABLE[0]), float(_A_TABLE[1] - _A_TABLE[0]),
-           ref["quiet_t"], np.exp(ref["quiet_lnp"]), ref["tube_t"], np.exp(ref["tube_lnp"]), ref["umbra_t"],
-           np.exp(ref["umbra_lnp"]), ref["penumbra_t"], np.exp(ref["penumbra_lnp"]), temp, pres)
+    run_chunks(_blend, ny, a_clip, f_el, sp["umbra"], sp["penumbra"], float(_A_TABLE[0]),
+               float(_A_TABLE[1] - _A_TABLE[0]), ref["quiet_t"], np.exp(ref["quiet_lnp"]), ref["tube_t"],
+               np.exp(ref["tube_lnp"]), ref["umbra_t"], np.exp(ref["umbra_lnp"]), ref["penumbra_t"],
+               np.exp(ref["penumbra_lnp"]), temp, pres)
 
     # Velocity: anelastic granular flow outside the magnetic structures, Evershed and moat flows.
     h, s = anelastic_profile(zg, ref["density"], h_v)
@@ -392,7 +394,7 @@ def model_atmosphere(shape=(1024, 1024), pixel_size=96 * u.km, *, seed, nz=80,
     gy *= 1 - sp["mask"]
     vel = np.empty((3,) + temp.shape, dtype=np.float32)
     flows = np.exp(-np.maximum(zg, 0.0) / 150.0)          # Evershed/moat flows: strongest at tau = 1
-    _flow(h, s, flows, vz0, gx, gy, sp["vx"], sp["vy"], vel)
+    run_chunks(_flow, vz0.shape[0], h, s, flows, vz0, gx, gy, sp["vx"], sp["vy"], vel)
 
     # Magnetic field: potential continuation of the element and spot base planes + internetwork.
     rng = stage_generator(root, "model_atmosphere", _INTERNETWORK)
@@ -413,7 +415,7 @@ def model_atmosphere(shape=(1024, 1024), pixel_size=96 * u.km, *, seed, nz=80,
     if not canopy:
         mag[2] += bz_el.astype(np.float32)
     c, dc = fe.internetwork_profile(zg)
-    _add_internetwork(c, dc, *pot, mag)
+    run_chunks(_add_internetwork, mag.shape[2], c, dc, *pot, mag)
 
     meta = {
         "origin": "gongsynth.model_atmosphere", "seed_entropy": str(root.entropy), "spot": has_spot,

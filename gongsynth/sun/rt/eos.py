@@ -30,6 +30,7 @@ from gongsynth.sun.rt.atomic_data import (
     PF_CAP,
     PF_TEMPERATURE,
 )
+from gongsynth.threads import run_chunks
 
 __all__ = ["K_BOLTZMANN", "AMU", "MEAN_MASS_PER_H", "PARTICLES_PER_H", "saha_phi", "electron_density",
            "solve_state", "hydrogen_ionised_fraction"]
@@ -99,11 +100,11 @@ def hydrogen_ionised_fraction(temperature, electron_density):
     return phi / (phi + np.asarray(electron_density, dtype=np.float64))
 
 
-@nb.njit(parallel=True, cache=True)
-def _solve_ne(phi, abund, nh_or_ntot, from_pressure, sum_a, out):
-    """Newton in ln n_e, bracketed; phi (nel, n)."""
-    nel, n = phi.shape
-    for p in nb.prange(n):
+@nb.njit(cache=True, nogil=True)
+def _solve_ne(start, stop, phi, abund, nh_or_ntot, from_pressure, sum_a, out):
+    """Newton in ln n_e, bracketed, at points ``start`` to ``stop``; phi (nel, n)."""
+    nel = phi.shape[0]
+    for p in range(start, stop):
         q = nh_or_ntot[p]
         hi = q if from_pressure else q * sum_a
         lo = hi * 1e-30
@@ -217,35 +218,35 @@ _GUESS_LNT = (math.log(1000.0), math.log(1e5), 240)
 _GUESS_LNQ = (math.log(1e2), math.log(1e24), 120)
 
 
-@nb.njit(parallel=True, cache=True)
-def _solve_ne_fast(t, q, from_pressure, sum_a, abund, phi_a, phi_b, phi_c, phi_bin, guess, out):
+@nb.njit(cache=True, nogil=True)
+def _solve_ne_fast(start, stop, t, q, from_pressure, sum_a, abund, phi_a, phi_b, phi_c, phi_bin, guess, out):
     """
-    n_e at every point: `saha_phi` in closed form, Newton from a bilinear start in ``guess``.
+    n_e at points ``start`` to ``stop``: `saha_phi` in closed form, Newton from a bilinear start in ``guess``.
 
     The same equation and stopping rule as `_solve_ne` (|Δ ln n_e| < 1e-11), so the same n_e to
     ~1e-11; each point depends on its own data only.  ``guess`` empty: the reference start.
     """
     t0, t1, nt = _GUESS_LNT
     q0, q1, nq = _GUESS_LNQ
-    nchunk = (t.size + 1023) // 1024
-    for c in nb.prange(nchunk):
-        phi = np.empty(abund.size)
-        for p in range(c * 1024, min(t.size, c * 1024 + 1024)):
-            _saha_point(t[p], abund, phi_a, phi_b, phi_c, phi_bin, phi)
-            x = 0.0
-            if guess.size:
-                ft = min(max((math.log(t[p]) - t0) / (t1 - t0) * (nt - 1), 0.0), nt - 1.000001)
-                fq = min(max((math.log(q[p]) - q0) / (q1 - q0) * (nq - 1), 0.0), nq - 1.000001)
-                it = int(ft)
-                iq = int(fq)
-                wt = ft - it
-                wq = fq - iq
-                x = ((1.0 - wt) * ((1.0 - wq) * guess[it, iq] + wq * guess[it, iq + 1])
-                     + wt * ((1.0 - wq) * guess[it + 1, iq] + wq * guess[it + 1, iq + 1]))
-            out[p] = _newton_ne(phi, abund, q[p], from_pressure, sum_a, x)
+    phi = np.empty(abund.size)
+    for p in range(start, stop):
+        _saha_point(t[p], abund, phi_a, phi_b, phi_c, phi_bin, phi)
+        x = 0.0
+        if guess.size:
+            ft = min(max((math.log(t[p]) - t0) / (t1 - t0) * (nt - 1), 0.0), nt - 1.000001)
+            fq = min(max((math.log(q[p]) - q0) / (q1 - q0) * (nq - 1), 0.0), nq - 1.000001)
+            it = int(ft)
+            iq = int(fq)
+            wt = ft - it
+            wq = fq - iq
+            x = ((1.0 - wt) * ((1.0 - wq) * guess[it, iq] + wq * guess[it, iq + 1])
+                 + wt * ((1.0 - wq) * guess[it + 1, iq] + wq * guess[it + 1, iq + 1]))
+        out[p] = _newton_ne(phi, abund, q[p], from_pressure, sum_a, x)
 
 
 _GUESS = {}
+#: Fewest points per thread's chunk.
+_MIN_CHUNK = 1024
 
 
 def _guess_table(from_pressure):
@@ -255,8 +256,8 @@ def _guess_table(from_pressure):
         lq = np.linspace(*_GUESS_LNQ)
         t, q = (np.ascontiguousarray(a.ravel()) for a in np.meshgrid(np.exp(lt), np.exp(lq), indexing="ij"))
         out = np.empty(t.size)
-        _solve_ne_fast(t, q, from_pressure, PARTICLES_PER_H, _ABUND, _PHI_A, _PHI_B, _PHI_C, _PHI_BIN,
-                       np.empty((0, 0)), out)
+        run_chunks(_solve_ne_fast, t.size, t, q, from_pressure, PARTICLES_PER_H, _ABUND, _PHI_A, _PHI_B,
+                   _PHI_C, _PHI_BIN, np.empty((0, 0)), out, min_chunk=_MIN_CHUNK)
         _GUESS[from_pressure] = np.log(out).reshape(lt.size, lq.size)
     return _GUESS[from_pressure]
 
@@ -306,14 +307,16 @@ def electron_density(temperature, *, hydrogen_density=None, gas_pressure=None, r
         raise ValueError("temperature and density/pressure must be finite and positive")
     out = np.empty(t.size)
     if not reference:
-        _solve_ne_fast(np.ascontiguousarray(t), np.ascontiguousarray(q), from_pressure, PARTICLES_PER_H,
-                       _ABUND, _PHI_A, _PHI_B, _PHI_C, _PHI_BIN, _guess_table(from_pressure), out)
+        run_chunks(_solve_ne_fast, t.size, np.ascontiguousarray(t), np.ascontiguousarray(q), from_pressure,
+                   PARTICLES_PER_H, _ABUND, _PHI_A, _PHI_B, _PHI_C, _PHI_BIN, _guess_table(from_pressure),
+                   out, min_chunk=_MIN_CHUNK)
         return out.reshape(shape)
     abund = _ABUND
     for start in range(0, t.size, _CHUNK):
         sl = slice(start, start + _CHUNK)
         phi = np.stack([saha_phi(e, t[sl]) for e in ELEMENTS])
-        _solve_ne(phi, abund, np.ascontiguousarray(q[sl]), from_pressure, PARTICLES_PER_H, out[sl])
+        run_chunks(_solve_ne, phi.shape[1], phi, abund, np.ascontiguousarray(q[sl]), from_pressure,
+                   PARTICLES_PER_H, out[sl], min_chunk=_MIN_CHUNK)
     return out.reshape(shape)
 
 

@@ -48,6 +48,7 @@ from gongsynth.sun.rt.voigt import (
     w_region2,
     w_table,
 )
+from gongsynth.threads import run_chunks
 
 __all__ = ["faddeeva", "faddeeva_fast", "solve_columns", "solve_columns_reference", "TAU_BOTTOM", "TAU_TOP",
            "VB_TAYLOR", "ZEEMAN_CM_PER_G"]
@@ -146,7 +147,6 @@ def _solve4(q, u, v, rq, ru, rv, al, b0, b1, b2, b3):
     return x0, x1, x2, x3
 
 
-@nb.njit(parallel=True, cache=True)
 def solve_columns_reference(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all, damp_all, src_all,
                             vlos, bpar, b1, b2, out_i, out_q, out_u, out_v, log_tau_c, log_tau_core):
     """
@@ -180,9 +180,18 @@ def solve_columns_reference(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_al
     log_tau_c, log_tau_core : (ncol, nz) float32
         Filled with log10 of the continuum and ``core_index`` optical depth along the ray.
     """
-    ncol, nz = kc_all.shape
+    run_chunks(_reference_rays, kc_all.shape[0], lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all,
+               dop_all, damp_all, src_all, vlos, bpar, b1, b2, out_i, out_q, out_u, out_v, log_tau_c,
+               log_tau_core)
+
+
+@nb.njit(cache=True, nogil=True)
+def _reference_rays(start, stop, lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all, damp_all,
+                    src_all, vlos, bpar, b1, b2, out_i, out_q, out_u, out_v, log_tau_c, log_tau_core):
+    """Rays ``start`` to ``stop`` of `solve_columns_reference`."""
+    nz = kc_all.shape[1]
     nl = lam_cm.size
-    for p in nb.prange(ncol):
+    for p in range(start, stop):
         kc = kc_all[p]
         kl = kl_all[p]
         dop = dop_all[p]
@@ -382,7 +391,6 @@ def _step(i0, i1, i2, i3, eu, ec, dt, ex, bu, bc):
                                              y0, y1, y2, y3)
 
 
-@nb.njit(parallel=True, cache=True)
 def solve_columns(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all, damp_all, src_all, vlos,
                   bpar, b1, b2, out_i, out_q, out_u, out_v, log_tau_c, log_tau_core):
     """
@@ -390,9 +398,9 @@ def solve_columns(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all
 
     The DELO-linear solution of the module docstring over the same points as
     `solve_columns_reference`, computed faster (`_solve_ray`, one ray per
-    call; this parallel loop only hands out the rays, which keeps its
-    compilation short): all wavelengths are advanced together point by point
-    (independent work for the processor between the steps of one recursion),
+    call, chunks of rays on the threads of `~gongsynth.threads.run_chunks`):
+    all wavelengths are advanced together point by point (independent work
+    for the processor between the steps of one recursion),
     w(z) in W4's regions as contiguous runs of wavelengths (`_w_vec`), and a ray
     with B = 0 at every integrated point takes the scalar solve (Q = U = V = 0
     exactly; I as the 4 × 4 solve gives it with zero off-diagonal elements).
@@ -423,12 +431,18 @@ def solve_columns(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all
     log_tau_c, log_tau_core : (ncol, nz) float32
         Filled with log10 of the continuum and ``core_index`` optical depth along the ray.
     """
-    ncol = kc_all.shape[0]
-    for j in range(lam_cm.size - 1):
-        if not lam_cm[j] < lam_cm[j + 1]:
-            raise ValueError("lam_cm must be strictly increasing")
-    dl = lam_cm - lam0
-    for p in nb.prange(ncol):
+    if not np.all(np.diff(lam_cm) > 0):
+        raise ValueError("lam_cm must be strictly increasing")
+    run_chunks(_solve_rays, kc_all.shape[0], lam_cm - lam0, lam0, lande_g, core_index, ds, kc_all, kl_all,
+               dop_all, damp_all, src_all, vlos, bpar, b1, b2, out_i, out_q, out_u, out_v, log_tau_c,
+               log_tau_core)
+
+
+@nb.njit(cache=True, nogil=True, error_model="numpy", fastmath=_CONTRACT)
+def _solve_rays(start, stop, dl, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all, damp_all, src_all,
+                vlos, bpar, b1, b2, out_i, out_q, out_u, out_v, log_tau_c, log_tau_core):
+    """Rays ``start`` to ``stop`` of `solve_columns` (``dl`` = λ − λ₀)."""
+    for p in range(start, stop):
         _solve_ray(dl, lam0, lande_g, core_index, ds, kc_all[p], kl_all[p], dop_all[p], damp_all[p],
                    src_all[p], vlos[p], bpar[p], b1[p], b2[p], out_i[p], out_q[p], out_u[p], out_v[p],
                    log_tau_c[p], log_tau_core[p])

@@ -33,6 +33,7 @@ import numba as nb
 import numpy as np
 
 from gongsynth.sun.rt.atomic_data import ABUNDANCE, IONISATION_EV, get_line
+from gongsynth.threads import run_chunks
 
 __all__ = ["line_constants", "point_opacity", "column_opacity", "continuum_opacity", "line_opacity",
            "planck", "LC_SIZE"]
@@ -239,14 +240,14 @@ def continuum_opacity(wavelength_nm, temperature, electron_density, hydrogen_den
     t, ne, nh = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in
                                       (temperature, electron_density, hydrogen_density)))
     out = np.empty(t.shape)
-    _continuum_many(float(wavelength_nm) * 1e-7, t.reshape(-1), ne.reshape(-1), nh.reshape(-1),
-                    out.reshape(-1))
+    flat = [np.ascontiguousarray(a.reshape(-1)) for a in (t, ne, nh)]
+    run_chunks(_continuum_many, t.size, float(wavelength_nm) * 1e-7, *flat, out.reshape(-1), min_chunk=1024)
     return out
 
 
-@nb.njit(parallel=True, cache=True)
-def _continuum_many(lam, t, ne, nh, out):
-    for p in nb.prange(t.size):
+@nb.njit(cache=True, nogil=True)
+def _continuum_many(start, stop, lam, t, ne, nh, out):
+    for p in range(start, stop):
         out[p] = _continuum(lam, t[p], ne[p], nh[p])[0]
 
 
@@ -281,7 +282,6 @@ def line_opacity(temperature, electron_density, hydrogen_density, microturbulenc
             "damping": out[3], "planck": out[4]}
 
 
-@nb.njit(parallel=True, cache=True)
 def column_opacity(temp, ne, nh, vturb, const, pf_table, kc, kl, dop, damping, source):
     """
     Fill (ncol, nz) arrays with `point_opacity` at every point (vturb in cm/s).
@@ -295,8 +295,15 @@ def column_opacity(temp, ne, nh, vturb, const, pf_table, kc, kl, dop, damping, s
     kc, kl, dop, damping, source : (ncol, nz) float64
         Output: κ_c, κ_L (cm⁻¹), Δλ_D (cm), a, B_λ.
     """
-    ncol, nz = temp.shape
-    for p in nb.prange(ncol):
+    run_chunks(_column_opacity_rows, temp.shape[0], temp, ne, nh, vturb, const, pf_table, kc, kl, dop,
+               damping, source)
+
+
+@nb.njit(cache=True, nogil=True)
+def _column_opacity_rows(start, stop, temp, ne, nh, vturb, const, pf_table, kc, kl, dop, damping, source):
+    """Columns ``start`` to ``stop`` of `column_opacity`."""
+    nz = temp.shape[1]
+    for p in range(start, stop):
         for k in range(nz):
             r = point_opacity(temp[p, k], ne[p, k], nh[p, k], vturb[p, k], const, pf_table)
             kc[p, k], kl[p, k], dop[p, k], damping[p, k], source[p, k] = r

@@ -23,6 +23,8 @@ import math
 import numba as nb
 import numpy as np
 
+from gongsynth.threads import run_chunks
+
 __all__ = ["ray_offsets", "sample_rays"]
 
 
@@ -60,14 +62,13 @@ def ray_offsets(z_km, z_ref_km, mu, azimuth_rad, pixel_km):
     return shift * math.cos(azimuth_rad), shift * math.sin(azimuth_rad)
 
 
-@nb.njit(parallel=True, cache=True)
 def sample_rays(field, rows, dx, dy, out):
     """
     Sample a (nz, ny, nx) field along the rays of the given output rows.
 
     Parameters
     ----------
-    field : (nz, ny, nx) array
+    field : (nz, ny, nx) float32 array
         Any strides (broadcast views are fine).
     rows : (nr,) int64
         Output rows.
@@ -76,12 +77,27 @@ def sample_rays(field, rows, dx, dy, out):
     out : (nr * nx, nz) float64
         Filled with the bilinearly interpolated values, ray points bottom to top.
     """
+    if field.dtype != np.float32:
+        raise TypeError(f"field must be float32 (an Atmosphere's stored array), got {field.dtype}")
+    # Vertical rays (or whole-pixel shifts): plain copies.
+    aligned = bool(np.all(dx == np.floor(dx)) and np.all(dy == np.floor(dy)))
+    if not _sample_rays.signatures:
+        # One specialisation for C-ordered, strided and broadcast (read-only) fields alike: each
+        # further one would cost a first run another compile.
+        _sample_rays.compile(_SIGNATURE)
+        _sample_rays.disable_compile()
+    run_chunks(_sample_rays, rows.size * field.shape[2], field, rows, dx, dy, aligned, out, min_chunk=256)
+
+
+_SIGNATURE = (nb.int64, nb.int64, nb.types.Array(nb.float32, 3, "A", readonly=True), nb.int64[::1],
+              nb.float64[::1], nb.float64[::1], nb.boolean, nb.float64[:, ::1])
+
+
+@nb.njit(cache=True, nogil=True)
+def _sample_rays(start, stop, field, rows, dx, dy, aligned, out):
+    """Rays ``start`` to ``stop`` of `sample_rays`."""
     nz, ny, nx = field.shape
-    nr = rows.size
-    aligned = True                   # vertical rays (or whole-pixel shifts): plain copies
-    for k in range(nz):
-        aligned = aligned and dx[k] == math.floor(dx[k]) and dy[k] == math.floor(dy[k])
-    for q in nb.prange(nr * nx):
+    for q in range(start, stop):
         r = q // nx
         i = q - r * nx
         j = rows[r]

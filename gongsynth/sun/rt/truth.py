@@ -18,6 +18,8 @@ import astropy.units as u
 import numba as nb
 import numpy as np
 
+from gongsynth.threads import run_chunks
+
 __all__ = ["TRUTH_CHOICES", "truth_definition", "los_field_at_depth"]
 
 #: Named truth definitions: (optical depth scale, log10 τ, offset km, half width km, samples).
@@ -57,7 +59,6 @@ def truth_definition(truth):
     raise ValueError(f"truth must be one of {sorted(TRUTH_CHOICES)} or a height Quantity, got {truth!r}")
 
 
-@nb.njit(parallel=True, cache=True)
 def los_field_at_depth(z, log_tau, bpar, level, fixed_height, offset, half_width, nsamp, out, height_out):
     """
     Mean B·n over heights z(τ = 10^level) + offset ± half_width along each ray.
@@ -81,8 +82,16 @@ def los_field_at_depth(z, log_tau, bpar, level, fixed_height, offset, half_width
     out, height_out : (ncol,) float32
         Filled with the truth (G) and the anchor height (km).
     """
-    ncol, nz = bpar.shape
-    for p in nb.prange(ncol):
+    run_chunks(_los_field_rays, bpar.shape[0], z, log_tau, bpar, level, fixed_height, offset, half_width,
+               nsamp, out, height_out)
+
+
+@nb.njit(cache=True, nogil=True)
+def _los_field_rays(start, stop, z, log_tau, bpar, level, fixed_height, offset, half_width, nsamp, out,
+                    height_out):
+    """Rays ``start`` to ``stop`` of `los_field_at_depth`."""
+    nz = bpar.shape[1]
+    for p in range(start, stop):
         if fixed_height:
             z1 = level
         else:
