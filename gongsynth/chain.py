@@ -456,7 +456,7 @@ def unmeasured(expected_counts, config, *, instrument=None, obstime=None):
     `numpy.ndarray` of bool
         (ny, nx), True where the products are blanked.
     """
-    light = expected_counts.sum(axis=0).value
+    light = expected_counts.sum(axis=0, dtype=np.float64).value
     inst = instruments.get(config.instrument if instrument is None else instrument)
     frames = int(np.sum(inst.schedule(config.duration).frames_per_plane))
     signal = light / expected_counts.shape[0] * frames          # each frame goes to one of the planes

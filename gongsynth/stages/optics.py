@@ -607,8 +607,10 @@ def image_scene(light, truth=None, instrument=None, *, psf=True, seeing=True, wo
 
 def _image_bands(values, truth, banded, inst):
     """`image_scene` of a light made by bands (`_banded`): one pass over its rows, the truth after it."""
-    counts = _counts(u.Quantity(banded(values.band, values.shape[0]), values.unit, copy=False), inst,
-                     values.dtype)
+    # float32 counts (0.8 GB for HMI's 12 × 4096² instead of 1.6): relative rounding 6e-8, far below
+    # the photon noise of any pixel the camera draws from them (1/√λ, λ ≥ 1 e⁻ where light falls).
+    counts = _counts(u.Quantity(banded(values.band, values.shape[0], dtype=np.float32), values.unit,
+                                copy=False), inst, values.dtype)
     values.release()
     if truth is None:
         return counts, None, None

@@ -108,7 +108,7 @@ def render_disk(light, truth, h, x0, y0, distance, b0, radius,
                 patches, uniform, pixel_km, mirror_ok, n_e, e_index, v_sign,
                 amplitudes, totals, v_first, v_step, to_earth, plane0=0, row0=0):
     """
-    Fill the light (2C, NY, NX), or some of its planes or rows, and truth (NY, NX) of a full disk from the library.
+    Fill the light (2C, NY, NX), or some planes or rows of it, and the truth (NY, NX) of a full disk.
 
     C is the instrument's filtergrams per analyser state (GONG's 3 channels, HMI's 6 tunings): plane
     ``pol * C + c``, the layout of every instrument's ``analysers``.
