@@ -447,10 +447,11 @@ class BandImager:
                 for plane in slab:                 # the overlap moves up by a band
                     plane[:fy - band] = plane[band:]
                     plane[fy - band:] = 0
-            stop = min(first + fy, ny)
-            if stop > made:
-                slab[:, made - first:stop - first, field] = bands(made, stop)
-                made = stop
+            # New rows, a few hundred at a time (the renderer's output is a copy until placed).
+            for r0 in range(made, min(first + fy, ny), _BLOCK_ROWS * 2):
+                r1 = min(r0 + _BLOCK_ROWS * 2, first + fy, ny)
+                slab[:, r0 - first:r1 - first, field] = bands(r0, r1)
+                made = r1
             rows = slice(start // factor, min(start + band, ny) // factor)
             keep = (slice(d_top, d_top + rows.stop - rows.start), slice(d_left, d_left + nx // factor))
             base = self.slab(slab[0])[keep]

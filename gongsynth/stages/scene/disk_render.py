@@ -10,6 +10,7 @@ would take more than `LIGHT_BYTES` (HMI's 12 planes of 8192² samples) gets its 
 (a pass without the light's sums) and its light where the optics read it, a band of rows of
 every plane per pass of the renderer (a `~gongsynth.stages.scene.scene.DeferredStack`).
 """
+import mmap
 import warnings
 
 import astropy.units as u
@@ -56,7 +57,7 @@ def _plane_group(n_planes, grid):
     return int(min(n_planes, max(1, LIGHT_BYTES // per_plane)))
 
 
-def _deferred_light(render, n_planes, grid, unit):
+def _deferred_light(render, n_planes, grid, unit, patches=None):
     """
     The light as a `DeferredStack`: every plane of a band of rows in one pass of the renderer
     (`DeferredStack.band`: what the optics read), or one plane's rows, its group of planes rendered
@@ -85,8 +86,20 @@ def _deferred_light(render, n_planes, grid, unit):
 
     def release():
         cache["block"] = None
+        _drop_pages(patches)
 
     return DeferredStack((n_planes,) + grid, np.float32, unit, rows, release, bands)
+
+
+def _drop_pages(array):
+    """
+    Give back the resident pages of a memory-mapped (read-only) library array: they are read again
+    from the file if used later.  A full-disk render touches most of HMI's 0.9-GB library, which
+    would otherwise stay in the process's resident memory through the camera and the reduction.
+    """
+    mapped = getattr(array, "_mmap", None)
+    if mapped is not None and hasattr(mmap, "MADV_DONTNEED"):
+        mapped.madvise(mmap.MADV_DONTNEED)
 
 
 def library_scene(library, *, obstime=None, instrument=None, detector_shape=None, supersampling=None,
@@ -197,7 +210,7 @@ def library_scene(library, *, obstime=None, instrument=None, detector_shape=None
     if _plane_group(n_planes, grid) < n_planes:
         # Only the truth now (a cheap pass); the light where the optics read it, a band at a time.
         on_disk, outside = render(np.zeros((0,) + grid, dtype=np.float32), 0)
-        light = _deferred_light(render, n_planes, grid, to_earth.unit)
+        light = _deferred_light(render, n_planes, grid, to_earth.unit, library.patches)
     else:
         light = np.zeros((n_planes,) + grid, dtype=np.float32)
         on_disk, outside = render(light, 0)
