@@ -6,7 +6,9 @@ the real HMI map's date, then ``save``), first with an empty library cache (the 
 the Milne-Eddington Sun's in seconds, the 3-D Sun's by radiative transfer in minutes), then with it
 cached.  Printed: wall and CPU time, each stage's time, the peak resident memory of the process
 (VmHWM) and of each stage (the resident set sampled every 0.2 s while it runs), and the load average
-(the machine is shared: compare CPU times, or ratios within one run).
+(the machine is shared: compare CPU times, or ratios within one run).  Baselines in the same
+process: the wall time of one ``scipy.fft.rfft2`` of a supersampled plane (``wall_per_fft``), and
+the bytes of the K detector planes in float64 (``peak_per_stack``: the peak in copies of the stack).
 
     python benchmarks/bench_fulldisk_hmi.py [--sun model-atmosphere] [--shape 4096] [--cached-only]
 """
@@ -46,9 +48,21 @@ CODE = textwrap.dedent("""
     stage[0] = "save"
     result.save(sys.argv[3], overwrite=True)
     hwm = int([x for x in open("/proc/self/status") if x.startswith("VmHWM")][0].split()[1]) / 2**20
-    print(json.dumps({"wall_s": time.perf_counter() - start, "cpu_s": time.process_time() - cpu,
+    wall, cpu = time.perf_counter() - start, time.process_time() - cpu
+    # Plain baselines in the same process: one real FFT of a supersampled plane (the optics' unit of
+    # work), and the bytes of the K detector planes in float64 (what one copy of the stack costs).
+    import numpy as np, scipy.fft
+    n = int(sys.argv[2]) * result.config.instrument.supersampling
+    plane = np.random.default_rng(0).random((n, n), dtype=np.float32)
+    fft_start = time.perf_counter()
+    scipy.fft.rfft2(plane, workers=2)
+    fft_s = time.perf_counter() - fft_start
+    stack_GB = result.expected_counts.shape[0] * int(sys.argv[2])**2 * 8 / 2**30
+    print(json.dumps({"wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
                       "stages_s": {k: round(v, 1) for k, v in result.timings.items()},
-                      "peak_GB": round(hwm, 2), "stage_peak_GB": {k: round(v, 2) for k, v in peak.items()}}))
+                      "peak_GB": round(hwm, 2), "stage_peak_GB": {k: round(v, 2) for k, v in peak.items()},
+                      "baseline_fft_s": round(fft_s, 2), "wall_per_fft": round(wall / fft_s, 1),
+                      "float64_stack_GB": round(stack_GB, 2), "peak_per_stack": round(hwm / stack_GB, 2)}))
 """)
 
 

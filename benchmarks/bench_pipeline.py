@@ -13,6 +13,10 @@ same minute).
 
     python benchmarks/bench_pipeline.py [--shape 860] [--engine blocks] [--sun milne-eddington]
     python benchmarks/bench_pipeline.py --process 3 --sun milne-eddington
+    python benchmarks/bench_pipeline.py --photosphere-shape 1024 --pixel-size 96   # the papers' grid
+
+In-process runs print each stage's time and peak resident memory (sampled every 0.2 s), the CPU
+time, and the peak as a ratio to the process's memory after its imports (the same process).
 """
 import argparse
 import os
@@ -67,6 +71,10 @@ def main():
     parser.add_argument("--mode", default="tiled", choices=("tiled", "full-disk"))
     parser.add_argument("--sun", default=None, choices=("milne-eddington", "model-atmosphere"),
                         help="the built-in Sun (default: the mode's)")
+    parser.add_argument("--photosphere-shape", type=int, default=None, metavar="N",
+                        help="columns of the built-in Sun, N x N (the papers' grid: 1024)")
+    parser.add_argument("--pixel-size", type=float, default=None, metavar="KM",
+                        help="column spacing of the built-in Sun in km (the papers' grid: 96)")
     parser.add_argument("--process", type=int, default=0, metavar="N",
                         help="time N whole 'gongsynth simulate' processes instead")
     args = parser.parse_args()
@@ -74,19 +82,56 @@ def main():
         processes(args)
         return
 
-    start = time.perf_counter()
+    grid = {}
+    if args.photosphere_shape:
+        grid["photosphere_shape"] = (args.photosphere_shape,) * 2
+    if args.pixel_size:
+        grid["photosphere_pixel_size"] = args.pixel_size * u.km
+    floor_mb = _rss_mb()       # the baseline: this process after its imports, before any stage
+    peaks = _stage_peaks()
+    start, cpu = time.perf_counter(), time.process_time()
     result = gongsynth.simulate(seed=1, detector_shape=args.shape, engine=args.engine, sun=args.sun,
-                                duration=args.duration * u.min, mode=args.mode, progress=False)
-    total = time.perf_counter() - start
+                                duration=args.duration * u.min, mode=args.mode, progress=False, **grid)
+    total, cpu = time.perf_counter() - start, time.process_time() - cpu
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"gongsynth {gongsynth.__version__}: {args.mode}, detector "
           f"{result.magnetogram.data.shape[0]} px, {args.duration:g} min, engine {args.engine}, "
-          f"sun {result.config.sun}")
+          f"sun {result.config.sun}, photosphere {result.config.photosphere_shape} x "
+          f"{result.config.photosphere_pixel_size}; load {os.getloadavg()[0]:.1f}")
     for stage, seconds in result.timings.items():
-        print(f"  {stage:<16s} {seconds:7.2f} s")
-    print(f"  {'total':<16s} {total:7.2f} s   (import and set-up included: "
-          f"{total - sum(result.timings.values()):.2f} s outside the stages)")
-    print(f"  peak memory      {peak_mb:7.0f} MB")
+        print(f"  {stage:<16s} {seconds:7.2f} s   peak RSS {peaks.get(stage, 0):6.0f} MB")
+    print(f"  {'total':<16s} {total:7.2f} s wall, {cpu:.2f} s CPU (set-up outside the stages: "
+          f"{total - sum(result.timings.values()):.2f} s)")
+    print(f"  peak memory      {peak_mb:7.0f} MB = {peak_mb / floor_mb:.2f} x the process after its imports "
+          f"({floor_mb:.0f} MB)")
+
+
+def _rss_mb():
+    """The resident set of this process now, MB."""
+    with open("/proc/self/status") as status:
+        return int(next(x for x in status if x.startswith("VmRSS")).split()[1]) / 1024
+
+
+def _stage_peaks():
+    """{stage name: peak RSS in MB while it ran}, filled by a thread sampling every 0.2 s."""
+    import threading
+
+    import gongsynth.chain
+    peaks, now = {}, ["set-up"]
+    run_stage = gongsynth.chain.Stage.__call__
+
+    def named(self, state):
+        now[0] = self.name
+        return run_stage(self, state)
+
+    def watch():
+        while True:
+            peaks[now[0]] = max(peaks.get(now[0], 0.0), _rss_mb())
+            time.sleep(0.2)
+
+    gongsynth.chain.Stage.__call__ = named
+    threading.Thread(target=watch, daemon=True).start()
+    return peaks
 
 
 if __name__ == "__main__":

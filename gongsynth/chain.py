@@ -42,7 +42,7 @@ from gongsynth.seeding import child_sequence
 from gongsynth.stages import optics
 from gongsynth.stages.camera.integrate import integrate
 from gongsynth.stages.channels import channel_images
-from gongsynth.stages.reduction import reduce
+from gongsynth.stages.reduction import BAND_PIXELS, reduce
 from gongsynth.stages.scene.fulldisk import full_disk_scene
 from gongsynth.stages.scene.library import LIBRARY_SEED, cached_library
 from gongsynth.stages.scene.tiled import tiled_scenes
@@ -456,7 +456,7 @@ def unmeasured(expected_counts, config, *, instrument=None, obstime=None):
     `numpy.ndarray` of bool
         (ny, nx), True where the products are blanked.
     """
-    light = expected_counts.sum(axis=0).value
+    light = expected_counts.sum(axis=0, dtype=np.float64).value
     inst = instruments.get(config.instrument if instrument is None else instrument)
     frames = int(np.sum(inst.schedule(config.duration).frames_per_plane))
     signal = light / expected_counts.shape[0] * frames          # each frame goes to one of the planes
@@ -464,10 +464,13 @@ def unmeasured(expected_counts, config, *, instrument=None, obstime=None):
     faint = (light < SKY_FRACTION * light.max()) | (signal <= np.sqrt(signal + frames * read**2))
     if config.mode != "full-disk":
         return faint
-    off_disk = ~disk_geometry(light.shape, inst.plate_scale,
-                              obstime=config.obstime if obstime is None else obstime,
-                              pointing=config.pointing).on_disk
-    return faint | off_disk
+    # The limb test a band of rows at a time: the whole disk's geometry of a 4096² frame is ~2 GB.
+    step = max(1, BAND_PIXELS // light.shape[1])
+    for start in range(0, light.shape[0], step):
+        rows = slice(start, start + step)
+        faint[rows] |= ~disk_geometry(light.shape, inst.plate_scale, rows=rows, pointing=config.pointing,
+                                      obstime=config.obstime if obstime is None else obstime).on_disk
+    return faint
 
 
 def run_header(config):

@@ -101,3 +101,21 @@ def test_hmi_psf_is_wachters_through_the_shared_stage():
     # GONG: unchanged, the Airy pattern's first zero at 1.22 λ/D
     airy = psf_profile([0, 6.08] * u.arcsec, GONG, seeing=False).value
     assert airy[1] < 1e-4 * airy[0]
+
+
+def test_light_made_by_bands_images_as_the_whole_light(hmi_library, monkeypatch):
+    """A grid too large to hold goes through the optics in bands of rows, rendered once: the same
+    expected counts and truth as the whole light through the whole-plane operator, to float32 rounding."""
+    from gongsynth.stages import imagers
+    from gongsynth.stages.optics import image_scene
+    inst = HMI.replace(plate_scale=40 * u.arcsec)
+    whole = image_scene(*library_scene(hmi_library, instrument=inst, detector_shape=48, seed=3), inst)
+    monkeypatch.setattr(disk_render, "LIGHT_BYTES", 5 * 96 * 96 * 4)
+    monkeypatch.setattr(imagers, "_BAND_ROWS", 16)      # several bands, each slab moved on
+    light, truth = library_scene(hmi_library, instrument=inst, detector_shape=48, seed=3)
+    assert light.planes.has_bands
+    banded = image_scene(light, truth, inst)
+    scale = whole[0].value.max()
+    assert np.abs(banded[0].value - whole[0].value).max() < 2e-6 * scale
+    assert np.array_equal(banded[1], whole[1])                  # pixel means: the same bits
+    assert np.allclose(banded[2].value, whole[2].value, rtol=0, atol=2e-6 * np.abs(whole[2].value).max())

@@ -24,6 +24,10 @@ from gongsynth.validation import check_finite, check_quantity
 
 __all__ = ["Observables", "reduce", "algorithm", "subtract_dark", "divide_flat"]
 
+#: Pixels reduced at a time (a band of detector rows): the dark, flat and the algorithm's
+#: temporaries of a full-disk HMI frame (12 × 4096² planes) stay bounded.  GONG's 860² frame is one band.
+BAND_PIXELS = 1 << 20
+
 # GONG's algorithm moved to its instrument; its old path here still resolves.
 _MOVED = {"measured_phase", "phase_to_velocity", "reference_phase"}
 
@@ -38,7 +42,9 @@ def __getattr__(name):
 def _planes(raw, inst):
     """The (K, ...) float array of a RawPlanes-like object or an array."""
     data = getattr(raw, "data", raw)
-    data = np.asarray(getattr(data, "value", data), dtype=float)
+    data = np.asarray(getattr(data, "value", data))
+    if data.dtype != np.float32:       # float32 planes (HMI's whole DN) are widened a band at a time
+        data = data.astype(float, copy=False)
     n_planes = len(inst.analysers)
     if data.ndim < 1 or data.shape[0] != n_planes:
         raise ValueError(
@@ -125,7 +131,8 @@ def divide_flat(planes, flat):
     return planes / normalise_flat(flat, planes.shape[1:], planes.shape[0])
 
 
-def reduce(raw, instrument=None, dark=None, flat=None, *, frames_per_plane=None, **options):
+def reduce(raw, instrument=None, dark=None, flat=None, *, frames_per_plane=None, band_pixels=None,
+           **options):
     """
     Reduce K raw planes to a magnetogram, a Dopplergram and a (pseudo-)continuum.
 
@@ -154,6 +161,11 @@ def reduce(raw, instrument=None, dark=None, flat=None, *, frames_per_plane=None,
     frames_per_plane : array_like of int, optional
         Frames in each plane; taken from ``raw.frames_per_plane`` if omitted.
         Needed only for the dark subtraction.
+    band_pixels : int, optional
+        A (K, ny, nx) frame of more pixels is reduced a band of rows of about
+        this many pixels at a time (default `BAND_PIXELS`): the dark, the flat
+        and the algorithm work pixel by pixel, so the result does not depend
+        on it; only the temporaries' size does.
     **options
         Passed to the instrument's algorithm; GONG: ``wrap_margin``
         (`~astropy.units.Quantity`, angular distance from ±π below which a
@@ -194,16 +206,71 @@ def reduce(raw, instrument=None, dark=None, flat=None, *, frames_per_plane=None,
             raise ValueError("frames_per_plane is needed to subtract a dark from a plain array")
         if isinstance(dark, (str, os.PathLike)):
             dark = read_dark(dark)
-        planes = subtract_dark(planes, dark, frames_per_plane, inst)
+        check_quantity(dark, u.electron, "dark")
+        check_finite(dark, "dark")
+    else:
+        dark = None
     if flat is not None and flat is not False:
-        planes = divide_flat(planes, flat)
+        # Once: its median is the whole frame's, whatever the bands.
+        flat = normalise_flat(flat, planes.shape[1:], planes.shape[0])
+    else:
+        flat = None
 
-    observed = algorithm(inst)(planes, inst, **options)
+    def band(rows):
+        part = (planes if rows is None else planes[:, rows]).astype(float, copy=False)
+        if dark is not None:
+            part = subtract_dark(part, dark if rows is None or dark.ndim < 2 else dark[rows],
+                                 frames_per_plane, inst)
+        if flat is not None:
+            part = part / (flat if rows is None else flat[:, rows])
+        return algorithm(inst)(part, inst, **options)
+
+    band_rows = _band_rows(planes.shape, BAND_PIXELS if band_pixels is None else band_pixels)
+    if band_rows is None:
+        observed = band(None)
+    else:
+        observed = None
+        for start in range(0, planes.shape[1], band_rows):
+            rows = slice(start, start + band_rows)
+            observed = _place(observed, band(rows), rows, planes.shape[1])
     continuum = u.Quantity(observed.continuum)
     if continuum.unit == u.one:
         # The planes given to the algorithm are plain numbers in DN: so is a continuum made from them.
         observed = dataclasses.replace(observed, continuum=u.Quantity(continuum.value, u.adu))
     return observed
+
+
+def _band_rows(shape, band_pixels):
+    """Rows per band of a (K, ny, nx) frame, or None: one pass over the whole frame (any other shape)."""
+    if isinstance(band_pixels, bool) or not isinstance(band_pixels, (int, np.integer)) or band_pixels < 1:
+        raise ValueError(f"band_pixels must be a positive int, got {band_pixels!r}")
+    if len(shape) != 3 or shape[1] * shape[2] <= band_pixels:
+        return None
+    return max(1, int(band_pixels) // shape[2])
+
+
+def _place(whole, part, rows, ny):
+    """
+    Put the `Observables` of a band of rows into those of the whole frame (each field's
+    second-last axis; made from the first band's fields' shapes and types).
+    """
+    if whole is None:
+        fields = {}
+        for field in dataclasses.fields(part):
+            value = getattr(part, field.name)
+            if value is not None:
+                data = np.empty(value.shape[:-2] + (ny,) + value.shape[-1:], dtype=value.dtype)
+                unit = getattr(value, "unit", None)
+                value = data if unit is None else u.Quantity(data, unit, copy=False)
+            fields[field.name] = value
+        whole = dataclasses.replace(part, **fields)
+    for field in dataclasses.fields(part):
+        value = getattr(part, field.name)
+        if value is not None:
+            target = getattr(whole, field.name)
+            target = getattr(target, "value", target)
+            target[..., rows, :] = getattr(value, "value", value)
+    return whole
 
 
 def algorithm(instrument):

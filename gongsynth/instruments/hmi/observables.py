@@ -315,7 +315,8 @@ def reduce_hmi(planes, instrument=None):
         ``magnetogram`` (G), ``doppler`` (m/s, positive = redshift),
         ``continuum`` (HMI's continuum estimate averaged over LCP and RCP, in
         the unit of ``planes``), ``velocity`` (2, ...) corrected v_LCP and
-        v_RCP (m/s), ``phase`` (2, ...) first-harmonic phases (rad), and
+        v_RCP (m/s) and ``phase`` (2, ...) first-harmonic phases (rad), both
+        float32, and
         ``wrapped``: True where either polarisation's raw velocity lies outside
         the look-up table's monotonic range (the velocity is then clipped to
         ±``lut_velocity_max``: saturation).
@@ -333,24 +334,32 @@ def reduce_hmi(planes, instrument=None):
     flat = data.reshape(N_HMI_PLANES, -1)
     table = lookup_table(inst)
     gauss = inst.gauss_per_velocity.to_value(u.G * u.s / u.m)
-    velocity = np.empty((2, flat.shape[1]))
+    # v and B in float64; each polarisation's velocity and phase, diagnostics, in float32 (1 mm/s at
+    # 10 km/s, 1e-7 rad: far below the noise; 0.27 GB less for a 4096² frame).
+    velocity = np.empty((2, flat.shape[1]), dtype=np.float32)
     phase = np.empty_like(velocity)
+    magnetogram, doppler = np.empty(flat.shape[1]), np.empty(flat.shape[1])
     wrapped = np.zeros(flat.shape[1], dtype=bool)
     continuum = np.zeros(flat.shape[1])
     # Blocks of pixels bound the temporaries (a 4096² frame is 16.8 M pixels).
     for start in range(0, flat.shape[1], _BLOCK):
         block = slice(start, start + _BLOCK)
+        corrected = []
         for pol in (0, 1):
             part = flat[pol * N_TUNINGS:(pol + 1) * N_TUNINGS, block]
             harmonics = _harmonics(part)
             v1, _, phase[pol, block] = _velocities(harmonics, inst, second=False)
-            velocity[pol, block], outside = table.correct(v1, 1)
+            v, outside = table.correct(v1, 1)
+            velocity[pol, block] = v
+            corrected.append(v)
             wrapped[block] |= outside
             continuum[block] += _line_parameters(part, harmonics, v1, inst)[2] / 2
-    v_lcp, v_rcp = velocity
+        v_lcp, v_rcp = corrected
+        magnetogram[block] = (v_lcp - v_rcp) * gauss
+        doppler[block] = (v_lcp + v_rcp) / 2
     return Observables(
-        magnetogram=u.Quantity(((v_lcp - v_rcp) * gauss).reshape(shape), u.G),
-        doppler=u.Quantity(((v_lcp + v_rcp) / 2).reshape(shape), u.m / u.s),
+        magnetogram=u.Quantity(magnetogram.reshape(shape), u.G),
+        doppler=u.Quantity(doppler.reshape(shape), u.m / u.s),
         continuum=u.Quantity(continuum.reshape(shape), unit),
         velocity=u.Quantity(velocity.reshape((2,) + shape), u.m / u.s),
         phase=u.Quantity(phase.reshape((2,) + shape), u.rad),

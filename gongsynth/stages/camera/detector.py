@@ -337,6 +337,8 @@ def normalise_flat(flat, shape, n_planes=6):
     flat = np.asarray(flat, dtype=np.float64)
     if flat.shape not in ((ny, nx), (n_planes, ny, nx)):
         raise ValueError(f"flat must have shape {(ny, nx)} or {(n_planes, ny, nx)}, got {flat.shape}")
+    if flat.ndim == 3 and flat.strides[0] == 0:
+        flat = flat[0]     # one map broadcast to every plane (as this returns it): checked and kept once
     check_finite(flat, "flat")
     bad = int(np.count_nonzero(flat <= 0))
     if bad:

@@ -106,9 +106,9 @@ def render_disk(light, truth, h, x0, y0, distance, b0, radius,
                 cell_km, cells, cell_j0, cell_i0, seed, theta, ld_coeff,
                 level_net, level_first, level_count, level_uniform,
                 patches, uniform, pixel_km, mirror_ok, n_e, e_index, v_sign,
-                amplitudes, totals, v_first, v_step, to_earth, plane0=0):
+                amplitudes, totals, v_first, v_step, to_earth, plane0=0, row0=0):
     """
-    Fill the light (2C, NY, NX), or some of its planes, and truth (NY, NX) of a full disk from the library.
+    Fill the light (2C, NY, NX), or some planes or rows of it, and the truth (NY, NX) of a full disk.
 
     C is the instrument's filtergrams per analyser state (GONG's 3 channels, HMI's 6 tunings): plane
     ``pol * C + c``, the layout of every instrument's ``analysers``.
@@ -116,8 +116,10 @@ def render_disk(light, truth, h, x0, y0, distance, b0, radius,
     Parameters
     ----------
     light, truth : `numpy.ndarray`
-        float32 (n, NY, NX) and (NY, NX) outputs (zero beyond the limb), written in place: light
-        holds planes ``plane0 .. plane0 + n - 1`` (all 2C by default).
+        float32 (n, m, NX) and (NY, NX) outputs (zero beyond the limb), written in place: light
+        holds planes ``plane0 .. plane0 + n - 1`` (all 2C by default) of the grid's rows
+        ``row0 .. row0 + m - 1`` (m = NY by default), truth the same rows.  With n = 0 only the
+        truth is made (the light's sums are skipped: a cheap pass).
     h : float
         Grid spacing (rad).
     x0, y0 : float
@@ -160,6 +162,8 @@ def render_disk(light, truth, h, x0, y0, distance, b0, radius,
         Radiance at the Sun to radiance at Earth per arcsec².
     plane0 : int
         The first plane ``light`` holds (a group of planes at a time bounds the memory of a large grid).
+    row0 : int
+        The first grid row ``light`` holds (a band of rows at a time: the same bound, one pass).
 
     Returns
     -------
@@ -177,10 +181,13 @@ def render_disk(light, truth, h, x0, y0, distance, b0, radius,
     n_levels = level_net.size
     n_v, n_c = totals.shape
     n_out = light.shape[0]
+    n_rows = light.shape[1]
+    first = b_off if n_out == 0 else 0   # truth only: B·n's two sums alone
     size_y, size_x = ny * pixel_km, nx * pixel_km
     cb, sb = math.cos(b0), math.sin(b0)
-    counts = np.zeros((big_y, 2), dtype=np.int64)
-    for row in nb.prange(big_y):
+    counts = np.zeros((n_rows, 2), dtype=np.int64)
+    for band_row in nb.prange(n_rows):
+        row = row0 + band_row
         acc = np.empty(k_row)
         amp = np.empty((n_c, j))
         tot = np.empty(n_c)
@@ -203,7 +210,7 @@ def render_disk(light, truth, h, x0, y0, distance, b0, radius,
             mu = min(mu, 1.0)
             b = math.asin(min(max(sz / radius, -1.0), 1.0))
             lon = math.atan2(sy, sx)
-            counts[row, 0] += 1
+            counts[band_row, 0] += 1
             for k in range(k_row):
                 acc[k] = 0.0
             lon_d, lat_d = math.degrees(lon), math.degrees(b)
@@ -259,10 +266,10 @@ def render_disk(light, truth, h, x0, y0, distance, b0, radius,
                         src = patches[p, iy, ix, t0 + tt]
                     else:
                         src = uniform[uni, t0 + tt]
-                    for k in range(v_off):
+                    for k in range(first, v_off):
                         acc[k] += wgt * src[k]
                     ws = wgt * s
-                    for k in range(v_off, k_row):
+                    for k in range(max(v_off, first), k_row):
                         acc[k] += ws * src[k]
             # -- limb darkening at the sample's own μ, then the Doppler basis at its velocity
             ld = 0.0
@@ -270,8 +277,12 @@ def render_disk(light, truth, h, x0, y0, distance, b0, radius,
                 ld = ld * mu + ld_coeff[k]
             xv = (vel - v_first) / v_step
             if xv < 0.0 or xv > n_v - 1:
-                counts[row, 1] += 1
+                counts[band_row, 1] += 1
                 xv = min(max(xv, 0.0), n_v - 1.0)
+            # The true B·n: the patch frame's observer lies toward +x at the sample's own angle.
+            truth[row, col] = acc[b_off] * mu + acc[b_off + 1] * math.sin(view)
+            if n_out == 0:
+                continue
             kv = min(np.int64(xv), n_v - 2)
             fv = xv - kv
             for c in range(n_c):
@@ -289,7 +300,5 @@ def render_disk(light, truth, h, x0, y0, distance, b0, radius,
                     val = (acc[e0] + vs * acc[v_off]) * tot[c]
                     for qq in range(j):
                         val += amp[c, qq] * (acc[e0 + 1 + qq] + vs * acc[v_off + 1 + qq])
-                    light[out, row, col] = scale * val
-            # The true B·n: the patch frame's observer lies toward +x at the sample's own angle.
-            truth[row, col] = acc[b_off] * mu + acc[b_off + 1] * math.sin(view)
+                    light[out, band_row, col] = scale * val
     return counts[:, 0].sum(), counts[:, 1].sum()

@@ -6,9 +6,11 @@ for a `~gongsynth.stages.scene.library.PatchLibrary`: the large scales
 (`gongsynth.stages.scene.surface.large_scale_grid`) on a heliographic grid,
 then one pass of `gongsynth.stages.scene.disk_kernel.render_disk` over the
 supersampled grid (~1 s for the default 4300² samples on 2 cores).  A grid whose light
-would take more than `LIGHT_BYTES` (HMI's 12 planes of 8192² samples) is rendered a group
-of planes at a time, where the optics read them (a `~gongsynth.stages.scene.scene.DeferredStack`).
+would take more than `LIGHT_BYTES` (HMI's 12 planes of 8192² samples) gets its truth at once
+(a pass without the light's sums) and its light where the optics read it, a band of rows of
+every plane per pass of the renderer (a `~gongsynth.stages.scene.scene.DeferredStack`).
 """
+import mmap
 import warnings
 
 import astropy.units as u
@@ -55,16 +57,17 @@ def _plane_group(n_planes, grid):
     return int(min(n_planes, max(1, LIGHT_BYTES // per_plane)))
 
 
-def _deferred_light(first, render, n_planes, unit):
+def _deferred_light(render, n_planes, grid, unit, patches=None):
     """
-    The light as a `DeferredStack` whose planes are rendered a group at a time.
+    The light as a `DeferredStack`: every plane of a band of rows in one pass of the renderer
+    (`DeferredStack.band`: what the optics read), or one plane's rows, its group of planes rendered
+    whole (`_plane_group`) when first asked for.
 
-    ``first`` holds the first group's planes (already rendered); asking for a plane of another
-    group renders that group in its place.  A whole plane is given as a copy, so that a reader that
-    keeps one (`gongsynth.stages.imagers.image_planes` keeps the first) does not keep its group.
+    A whole plane is given as a copy, so that a reader that keeps one
+    (`gongsynth.stages.imagers.image_planes` keeps the first) does not keep its group.
     """
-    group, grid = first.shape[0], first.shape[1:]
-    cache = {"start": 0, "block": first}
+    group = _plane_group(n_planes, grid)
+    cache = {"start": None, "block": None}
 
     def rows(i, start, stop):
         g0 = (i // group) * group
@@ -76,10 +79,27 @@ def _deferred_light(first, render, n_planes, unit):
         out = cache["block"][i - g0, start:stop]
         return out.copy() if (start, stop) == (0, grid[0]) else out
 
+    def bands(start, stop):
+        block = np.zeros((n_planes, stop - start, grid[1]), dtype=np.float32)
+        render(block, 0, start)
+        return block
+
     def release():
         cache["block"] = None
+        _drop_pages(patches)
 
-    return DeferredStack((n_planes,) + grid, np.float32, unit, rows, release)
+    return DeferredStack((n_planes,) + grid, np.float32, unit, rows, release, bands)
+
+
+def _drop_pages(array):
+    """
+    Give back the resident pages of a memory-mapped (read-only) library array: they are read again
+    from the file if used later.  A full-disk render touches most of HMI's 0.9-GB library, which
+    would otherwise stay in the process's resident memory through the camera and the reduction.
+    """
+    mapped = getattr(array, "_mmap", None)
+    if mapped is not None and hasattr(mmap, "MADV_DONTNEED"):
+        mapped.madvise(mmap.MADV_DONTNEED)
 
 
 def library_scene(library, *, obstime=None, instrument=None, detector_shape=None, supersampling=None,
@@ -170,7 +190,7 @@ def library_scene(library, *, obstime=None, instrument=None, detector_shape=None
     r_sun = radius.to_value(u.km)
     cells, (cell_j0, cell_i0) = cell_table(r_sun, cell_km, distance, b0)
 
-    def render(light, plane0):
+    def render(light, plane0, row0=0):
         return render_disk(
             light, blos, scale.to_value(u.rad), *pointing_offset(pointing), distance, b0, r_sun,
             large.field, large.velocity, float(large.longitude[0]), float(large.latitude[0]),
@@ -185,13 +205,15 @@ def library_scene(library, *, obstime=None, instrument=None, detector_shape=None
             basis.amplitudes, basis.totals, float(basis.velocity[0]),
             float(basis.velocity[1] - basis.velocity[0]),
             # The basis integrates over wavelength in nm; the channel unit is per cm of spectrum × cm.
-            float(to_earth.value * (1 * u.nm).to_value(u.cm)), plane0)
+            float(to_earth.value * (1 * u.nm).to_value(u.cm)), plane0, row0)
 
-    group = _plane_group(n_planes, grid)
-    light = np.zeros((group,) + grid, dtype=np.float32)
-    on_disk, outside = render(light, 0)
-    if group < n_planes:
-        light = _deferred_light(light, render, n_planes, to_earth.unit)
+    if _plane_group(n_planes, grid) < n_planes:
+        # Only the truth now (a cheap pass); the light where the optics read it, a band at a time.
+        on_disk, outside = render(np.zeros((0,) + grid, dtype=np.float32), 0)
+        light = _deferred_light(render, n_planes, grid, to_earth.unit, library.patches)
+    else:
+        light = np.zeros((n_planes,) + grid, dtype=np.float32)
+        on_disk, outside = render(light, 0)
     if outside:
         warnings.warn(f"{outside} samples have a large-scale velocity beyond the library's Doppler basis "
                       f"(±{basis.max_velocity:.0f}): clamped", stacklevel=3)

@@ -52,6 +52,10 @@ class DeferredStack:
         ``rows(i, start, stop)`` → (stop - start, nx) array: rows of plane ``i``.
     release : callable, optional
         Frees whatever ``rows`` keeps between calls (called by `release`).
+    bands : callable, optional
+        ``bands(start, stop)`` → (k, stop - start, nx) array: rows of every
+        plane at once, for a maker whose planes share most of their work (a
+        full-disk render); see `band`.
 
     Examples
     --------
@@ -62,12 +66,37 @@ class DeferredStack:
     ((2, 4), (2, 3, 4))
     """
 
-    def __init__(self, shape, dtype, unit, rows, release=None):
+    def __init__(self, shape, dtype, unit, rows, release=None, bands=None):
         self.shape = tuple(int(n) for n in shape)
         self.dtype = np.dtype(dtype)
         self.unit = unit
         self._rows = rows
         self._release = release
+        self._bands = bands
+
+    @property
+    def has_bands(self):
+        """Whether `band` makes rows of every plane in one go."""
+        return self._bands is not None
+
+    def band(self, start, stop):
+        """
+        Rows ``start .. stop - 1`` of every plane, made at once.
+
+        Parameters
+        ----------
+        start, stop : int
+
+        Returns
+        -------
+        `numpy.ndarray`
+            (k, stop - start, nx), or (stop - start, nx) for a map.
+        """
+        if self._bands is not None:
+            return self._bands(start, stop)
+        if self.ndim == 2:
+            return self._rows(0, start, stop)
+        return np.stack([self._rows(i, start, stop) for i in range(self.shape[0])])
 
     @property
     def ndim(self):
