@@ -40,14 +40,14 @@ from gongsynth.observing import site_location
 from gongsynth.products.maps import PRODUCTS, make_product_map
 from gongsynth.seeding import child_sequence
 from gongsynth.stages import optics
+from gongsynth.stages.averaging import average_observables, minutes_in, sum_planes
 from gongsynth.stages.camera.integrate import integrate
 from gongsynth.stages.channels import channel_images
-from gongsynth.stages.averaging import average_observables, minutes_in, sum_planes
 from gongsynth.stages.reduction import reduce
-from gongsynth.stages.seeing import SeeingPlanes, frame_motion
 from gongsynth.stages.scene.fulldisk import full_disk_scene
 from gongsynth.stages.scene.library import LIBRARY_SEED, cached_library
 from gongsynth.stages.scene.tiled import tiled_scenes
+from gongsynth.stages.seeing import SeeingPlanes, frame_motion
 from gongsynth.sun.atmosphere import Atmosphere
 from gongsynth.sun.photosphere import DeferredStokes
 from gongsynth.sun.rt.synthesis import synthesize as rt_synthesize
@@ -366,8 +366,9 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
     stages.append(Stage("camera", ("expected_counts",), ("raw", "raw_minutes"), camera,
                         "frame seeing, frames, flat, dark, photon and read noise, dither, truncation "
                         "(minute by minute)"))
-    stages.append(Stage("reduction", ("raw", "raw_minutes", "expected_counts"), ("observables", "sky"), reduction,
-                        "dark, flat, the instrument's algorithm: Doppler, B_LOS, continuum (minutes averaged)"))
+    stages.append(Stage("reduction", ("raw", "raw_minutes", "expected_counts"), ("observables", "sky"),
+                        reduction, "dark, flat, the instrument's algorithm: Doppler, B_LOS, continuum "
+                        "(minutes averaged)"))
     stages.append(Stage("maps", ("observables", "sky", "truth", "truth_psf", "light"),
                         tuple(f"{p}_map" for p in PRODUCTS), maps,
                         "sunpy Maps with helioprojective WCS; sky blanked"))

@@ -27,6 +27,7 @@ BIG_BEAR_INTENSITY = REAL / "gong" / "bbiqa090905t1854.fits.gz"
 
 
 def main(argv=None):
+    """Run the simulation, compare it with the real map, write the numbers."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
     parser.add_argument("--out", type=Path, required=True)
     parser.add_argument("--name", default="run")

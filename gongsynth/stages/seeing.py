@@ -133,8 +133,8 @@ def _frame_autocovariance(n, instrument):
     norm = sigma2 / (2 * np.trapezoid(motion_spectrum(f * u.Hz, instrument), f))
     length = 4 * n
     freq = np.fft.rfftfreq(length, 1 / rate)
-    folded = sum(motion_spectrum((freq + k * rate) * u.Hz, instrument) * np.sinc((freq + k * rate) / rate) ** 2
-                 for k in range(-_ALIASES, _ALIASES + 1))
+    alias = [freq + k * rate for k in range(-_ALIASES, _ALIASES + 1)]
+    folded = sum(motion_spectrum(g * u.Hz, instrument) * np.sinc(g / rate) ** 2 for g in alias)
     return np.fft.irfft(norm * folded, n=length)[:n] * rate
 
 
@@ -266,7 +266,7 @@ def _weights(n_pixels, n_nodes, pixel, spacing):
 
 class SeeingPlanes:
     """
-    The planes each group of frames (a minute) really accumulates: each plane shifted and blurred by its own motion.
+    The planes each group of frames (a minute) accumulates: each shifted and blurred by its own motion.
 
     Parameters
     ----------
@@ -325,7 +325,8 @@ class SeeingPlanes:
         for p in range(out.shape[0]):
             d = self.derivatives[p]
             shift = m.mean[group, p] / self.pixel
-            blur = (m.second[group, p] - np.array([m.sigma_f2, m.sigma_f2, 0.0])[:, None, None]) / self.pixel**2
+            blur = m.second[group, p] - np.array([m.sigma_f2, m.sigma_f2, 0.0])[:, None, None]
+            blur = blur / self.pixel**2
             out[p] -= self._field(shift[0]) * d[0] + self._field(shift[1]) * d[1]
             out[p] += 0.5 * (self._field(blur[0]) * d[2] + self._field(blur[1]) * d[3])
             out[p] += self._field(blur[2]) * d[4]
