@@ -302,8 +302,8 @@ class SeeingPlanes:
         self.values, self.motion = values, motion
         self.pixel = instrument.plate_scale.to_value(u.arcsec)
         ny_nodes, nx_nodes = motion.mean.shape[-2:]
-        self.wy = _weights(values.shape[1], ny_nodes, self.pixel, motion.node_spacing)
-        self.wx = _weights(values.shape[2], nx_nodes, self.pixel, motion.node_spacing)
+        self.wy = _weights(values.shape[1], ny_nodes, self.pixel, motion.node_spacing).astype(np.float32)
+        self.wx = _weights(values.shape[2], nx_nodes, self.pixel, motion.node_spacing).astype(np.float32)
         # Per plane: d/dy, d/dx, d²/dy², d²/dx², d²/dydx (central differences, pixels).
         self.derivatives = np.empty((values.shape[0], 5) + values.shape[1:], dtype=np.float32)
         for p, plane in enumerate(values):
@@ -314,22 +314,24 @@ class SeeingPlanes:
             self.derivatives[p, 4] = np.gradient(gy, axis=1)
 
     def _field(self, nodes):
-        return self.wy @ nodes @ self.wx.T
+        return self.wy @ nodes.astype(np.float32) @ self.wx.T
 
     def __len__(self):
         return self.motion.mean.shape[0]
 
     def __getitem__(self, group):
         m = self.motion
-        out = np.array(self.values, dtype=np.float64)
+        out = np.array(self.values, dtype=np.float32)
+        centred = np.array([m.sigma_f2, m.sigma_f2, 0.0])[:, None, None]
         for p in range(out.shape[0]):
             d = self.derivatives[p]
-            shift = m.mean[group, p] / self.pixel
-            blur = m.second[group, p] - np.array([m.sigma_f2, m.sigma_f2, 0.0])[:, None, None]
-            blur = blur / self.pixel**2
-            out[p] -= self._field(shift[0]) * d[0] + self._field(shift[1]) * d[1]
-            out[p] += 0.5 * (self._field(blur[0]) * d[2] + self._field(blur[1]) * d[3])
-            out[p] += self._field(blur[2]) * d[4]
+            # Coefficients of the five derivatives: -δy, -δx, ½ Syy, ½ Sxx, Syx (pixels, pixels²).
+            shift = -m.mean[group, p] / self.pixel
+            blur = (m.second[group, p] - centred) / self.pixel**2 * np.array([0.5, 0.5, 1.0])[:, None, None]
+            for k, nodes in enumerate((shift[0], shift[1], blur[0], blur[1], blur[2])):
+                term = self._field(nodes)
+                term *= d[k]
+                out[p] += term
         np.maximum(out, 0.0, out=out)
-        out = out.astype(self.values.dtype) if np.issubdtype(self.values.dtype, np.floating) else out
+        out = out.astype(self.values.dtype) if self.values.dtype == np.float64 else out
         return out * self.unit if self.unit is not None else out
