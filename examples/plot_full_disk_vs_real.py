@@ -56,7 +56,9 @@ MDI = REAL / "mdi" / "mdi.fd_m_96m_lev182.20101015_000000_TAI.data.fits"
 # (the disk's centre sits 11.6 pixels east and 1.9 south of the image's, so
 # the simulated disk lies on the real one's pixels) from the real file's
 # header.  The real map is the average of nine one-minute magnetograms
-# (``N_USED = 9``), so the run integrates 9 minutes.  Both maps are solar
+# (``N_USED = 9``), so the run takes 9 minutes and, as GONG does, reduces them
+# minute by minute and averages the maps (``minute_average``), each minute
+# with its own image motion (``frame_seeing``).  Both maps are solar
 # north up: GONG's reduction takes out the P angle (the header's ``PA``).
 
 real = gongsynth.load_observation(BIG_BEAR)
