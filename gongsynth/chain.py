@@ -26,6 +26,7 @@ run in one go.  The instrument's physical effects that can be switched off
 (PSF, seeing, flat, dark, photon noise, read noise, dither, truncation) are the
 config's ``effects`` (TOML ``[effects]``), passed to the stages that hold them.
 """
+import dataclasses
 import sys
 import time
 from dataclasses import dataclass
@@ -339,6 +340,8 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
                                   dark=dark if effects.dark else False, photon_noise=effects.photon_noise,
                                   read_noise=effects.read_noise, dither=effects.dither,
                                   truncation=effects.truncation, workers=config.workers, progress=progress))
+            if minute:  # the same synthetic flat and dark every minute: hold one copy
+                raws[-1] = dataclasses.replace(raws[-1], flat=raws[0].flat, dark=raws[0].dark)
         return {"raw": raws[0] if minutes == 1 else sum_planes(raws), "raw_minutes": raws}
 
     def reduction(raw, raw_minutes, expected_counts):
