@@ -80,7 +80,7 @@ def sum_planes(raws):
     for key in list(header.keys()):
         if key in _SUMMED or key.startswith(("NFRAME", "DITHSUM")):
             header[key] = sum(r.header[key] for r in raws)
-    header["NMINUTES"] = (len(raws), "sets of planes reduced one by one, maps averaged")
+    header["NMINUTES"] = (len(raws), "minutes reduced one by one, maps averaged")
     return dataclasses.replace(first, data=np.sum([r.data for r in raws], axis=0),
                                frames_per_plane=np.sum([r.frames_per_plane for r in raws], axis=0),
                                header=header)
