@@ -347,7 +347,7 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
     def reduction(raw, raw_minutes, expected_counts):
         observables = reduce(raw, inst)
         if len(raw_minutes) > 1:
-            observables = average_observables([reduce(r, inst) for r in raw_minutes], observables)
+            observables = average_observables((reduce(r, inst) for r in raw_minutes), observables)
         return {"observables": observables,
                 "sky": unmeasured(expected_counts, config, instrument=inst, obstime=pointing.obstime)}
 

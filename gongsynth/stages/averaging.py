@@ -92,8 +92,9 @@ def average_observables(minutes, whole):
 
     Parameters
     ----------
-    minutes : sequence of `~gongsynth.instruments.base.Observables`
-        One reduction per minute.
+    minutes : iterable of `~gongsynth.instruments.base.Observables`
+        One reduction per minute (a generator is summed as it goes: one
+        minute's maps held at a time).
     whole : `~gongsynth.instruments.base.Observables`
         The reduction of the summed planes: its continuum (the sum of the
         planes) is kept.
@@ -104,9 +105,17 @@ def average_observables(minutes, whole):
         ``magnetogram``, ``doppler``, ``velocity`` and ``phase``-derived
         velocities averaged over the minutes; ``wrapped`` where any minute is.
     """
-    def mean(name):
-        return u.Quantity([getattr(m, name) for m in minutes]).mean(axis=0)
-
-    return dataclasses.replace(whole, magnetogram=mean("magnetogram"), doppler=mean("doppler"),
-                               velocity=mean("velocity"),
-                               wrapped=np.any([m.wrapped for m in minutes], axis=0))
+    names = ("magnetogram", "doppler", "velocity")
+    sums, wrapped, count = None, None, 0
+    for minute in minutes:
+        if sums is None:
+            sums = {name: u.Quantity(getattr(minute, name), copy=True) for name in names}
+            wrapped = np.array(minute.wrapped, copy=True)
+        else:
+            for name in names:
+                sums[name] += getattr(minute, name)
+            wrapped |= minute.wrapped
+        count += 1
+    if not count:
+        raise ValueError("minutes holds no reduction")
+    return dataclasses.replace(whole, wrapped=wrapped, **{name: sums[name] / count for name in names})

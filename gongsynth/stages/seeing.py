@@ -249,19 +249,17 @@ def frame_motion(schedule, shape, instrument, seed, *, groups=1):
 
 
 def _weights(n_pixels, n_nodes, pixel, spacing):
-    """Bilinear weights (n_pixels, n_nodes) of the nodes at each pixel, rows scaled to unit norm."""
-    w = np.zeros((n_pixels, n_nodes))
+    """
+    Bilinear interpolation along one axis: for each pixel the lower node, and the two nodes'
+    weights scaled to unit norm (so that an interpolated field keeps the nodes' variance).
+    """
     if n_nodes == 1:
-        w[:] = 1.0
-        return w
+        return np.zeros(n_pixels, dtype=int), np.ones(n_pixels), np.zeros(n_pixels)
     pos = np.arange(n_pixels) * pixel / spacing
     i0 = np.clip(np.floor(pos).astype(int), 0, n_nodes - 2)
     t = pos - i0
-    rows = np.arange(n_pixels)
-    w[rows, i0] = 1 - t
-    w[rows, i0 + 1] = t
-    # Divided by the root of the sum of squared weights: the same variance at every pixel.
-    return w / np.sqrt((w**2).sum(axis=1, keepdims=True))
+    norm = np.sqrt((1 - t) ** 2 + t**2)
+    return i0, (1 - t) / norm, t / norm
 
 
 class SeeingPlanes:
@@ -302,8 +300,8 @@ class SeeingPlanes:
         self.values, self.motion = values, motion
         self.pixel = instrument.plate_scale.to_value(u.arcsec)
         ny_nodes, nx_nodes = motion.mean.shape[-2:]
-        self.wy = _weights(values.shape[1], ny_nodes, self.pixel, motion.node_spacing).astype(np.float32)
-        self.wx = _weights(values.shape[2], nx_nodes, self.pixel, motion.node_spacing).astype(np.float32)
+        self.wy = _weights(values.shape[1], ny_nodes, self.pixel, motion.node_spacing)
+        self.wx = _weights(values.shape[2], nx_nodes, self.pixel, motion.node_spacing)
         # Per plane: d/dy, d/dx, d²/dy², d²/dx², d²/dydx (central differences, pixels).
         self.derivatives = np.empty((values.shape[0], 5) + values.shape[1:], dtype=np.float32)
         for p, plane in enumerate(values):
@@ -314,7 +312,16 @@ class SeeingPlanes:
             self.derivatives[p, 4] = np.gradient(gy, axis=1)
 
     def _field(self, nodes):
-        return self.wy @ nodes.astype(np.float32) @ self.wx.T
+        """A node grid interpolated to the pixels (separable; float32)."""
+        (iy, ay, by), (ix, ax, bx) = self.wy, self.wx
+        if nodes.shape[0] == 1:
+            rows = np.broadcast_to(nodes[0], (iy.size, nodes.shape[1]))
+        else:
+            rows = ay[:, None] * nodes[iy] + by[:, None] * nodes[iy + 1]
+        rows = rows.astype(np.float32)
+        if nodes.shape[1] == 1:
+            return np.repeat(rows, ix.size, axis=1)
+        return rows[:, ix] * ax.astype(np.float32) + rows[:, ix + 1] * bx.astype(np.float32)
 
     def __len__(self):
         return self.motion.mean.shape[0]
