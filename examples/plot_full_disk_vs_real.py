@@ -56,7 +56,10 @@ MDI = REAL / "mdi" / "mdi.fd_m_96m_lev182.20101015_000000_TAI.data.fits"
 # (the disk's centre sits 11.6 pixels east and 1.9 south of the image's, so
 # the simulated disk lies on the real one's pixels) from the real file's
 # header.  The real map is the average of nine one-minute magnetograms
-# (``N_USED = 9``), so the run integrates 9 minutes.  Both maps are solar
+# (``N_USED = 9``), so the run takes 9 minutes.  GONG's minute-by-minute
+# reduction and frame-to-frame seeing (``minute_average``, ``frame_seeing``:
+# opt-in, see the scene and optics guide for what they change) are left off
+# here to keep the gallery fast.  Both maps are solar
 # north up: GONG's reduction takes out the P angle (the header's ``PA``).
 
 real = gongsynth.load_observation(BIG_BEAR)

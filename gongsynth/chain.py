@@ -26,6 +26,7 @@ run in one go.  The instrument's physical effects that can be switched off
 (PSF, seeing, flat, dark, photon noise, read noise, dither, truncation) are the
 config's ``effects`` (TOML ``[effects]``), passed to the stages that hold them.
 """
+import dataclasses
 import sys
 import time
 from dataclasses import dataclass
@@ -40,12 +41,14 @@ from gongsynth.observing import site_location
 from gongsynth.products.maps import PRODUCTS, make_product_map
 from gongsynth.seeding import child_sequence
 from gongsynth.stages import optics
+from gongsynth.stages.averaging import average_observables, minutes_in, sum_planes
 from gongsynth.stages.camera.integrate import integrate
 from gongsynth.stages.channels import channel_images
 from gongsynth.stages.reduction import BAND_PIXELS, reduce
 from gongsynth.stages.scene.fulldisk import full_disk_scene
 from gongsynth.stages.scene.library import LIBRARY_SEED, cached_library
 from gongsynth.stages.scene.tiled import tiled_scenes
+from gongsynth.stages.seeing import SeeingPlanes, frame_motion
 from gongsynth.sun.atmosphere import Atmosphere
 from gongsynth.sun.photosphere import DeferredStokes
 from gongsynth.sun.rt.synthesis import synthesize as rt_synthesize
@@ -320,15 +323,32 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
         return {"expected_counts": counts, "truth": truth, "truth_psf": truth_psf}
 
     def camera(expected_counts):
-        return {"raw": integrate(expected_counts, duration=config.duration, engine=config.engine,
-                                 seed=child_sequence(config.seed, "camera"), instrument=inst,
-                                 flat=flat if effects.flat else False, dark=dark if effects.dark else False,
-                                 photon_noise=effects.photon_noise, read_noise=effects.read_noise,
-                                 dither=effects.dither, truncation=effects.truncation,
-                                 workers=config.workers, progress=progress)}
+        # GONG reduces every minute (minute_average); each plane sees its own image motion (frame_seeing).
+        minutes = minutes_in(config.duration, inst) if effects.minute_average else 1
+        seen = None
+        if (effects.frame_seeing and effects.psf and effects.seeing and hasattr(inst, "seeing_wind_speed")
+                and inst.seeing_fwhm > 0 * u.arcsec and np.ndim(expected_counts) == 3):
+            motion = frame_motion(inst.schedule(config.duration), np.shape(expected_counts)[1:], inst,
+                                  child_sequence(config.seed, "frame-seeing"), groups=minutes)
+            seen = SeeingPlanes(expected_counts, motion, inst)
+        raws = []
+        for minute in range(minutes):
+            planes = expected_counts if seen is None else seen[minute]
+            seed = child_sequence(config.seed, "camera", *((minute,) if minutes > 1 else ()))
+            raws.append(integrate(planes, duration=config.duration / minutes, engine=config.engine, seed=seed,
+                                  instrument=inst, flat=flat if effects.flat else False,
+                                  dark=dark if effects.dark else False, photon_noise=effects.photon_noise,
+                                  read_noise=effects.read_noise, dither=effects.dither,
+                                  truncation=effects.truncation, workers=config.workers, progress=progress))
+            if minute:  # the same synthetic flat and dark every minute: hold one copy
+                raws[-1] = dataclasses.replace(raws[-1], flat=raws[0].flat, dark=raws[0].dark)
+        return {"raw": raws[0] if minutes == 1 else sum_planes(raws), "raw_minutes": raws}
 
-    def reduction(raw, expected_counts):
-        return {"observables": reduce(raw, inst),
+    def reduction(raw, raw_minutes, expected_counts):
+        observables = reduce(raw, inst)
+        if len(raw_minutes) > 1:
+            observables = average_observables((reduce(r, inst) for r in raw_minutes), observables)
+        return {"observables": observables,
                 "sky": unmeasured(expected_counts, config, instrument=inst, obstime=pointing.obstime)}
 
     def maps(observables, sky, truth, truth_psf, light):
@@ -346,10 +366,12 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
 
     stages.append(Stage("optics", ("light", "truth_scene"), ("expected_counts", "truth", "truth_psf"),
                         optics_stage, "PSF (aperture and seeing), resampling and binning to pixels"))
-    stages.append(Stage("camera", ("expected_counts",), ("raw",), camera,
-                        "frames, flat, dark, photon and read noise, dither, truncation"))
-    stages.append(Stage("reduction", ("raw", "expected_counts"), ("observables", "sky"), reduction,
-                        "dark, flat, the instrument's algorithm: Doppler, B_LOS, continuum"))
+    stages.append(Stage("camera", ("expected_counts",), ("raw", "raw_minutes"), camera,
+                        "frame seeing, frames, flat, dark, photon and read noise, dither, truncation "
+                        "(minute by minute)"))
+    stages.append(Stage("reduction", ("raw", "raw_minutes", "expected_counts"), ("observables", "sky"),
+                        reduction, "dark, flat, the instrument's algorithm: Doppler, B_LOS, continuum "
+                        "(minutes averaged)"))
     stages.append(Stage("maps", ("observables", "sky", "truth", "truth_psf", "light"),
                         tuple(f"{p}_map" for p in PRODUCTS), maps,
                         "sunpy Maps with helioprojective WCS; sky blanked"))

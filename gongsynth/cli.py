@@ -150,11 +150,16 @@ def build_parser():
     sim.add_argument("--overwrite", action="store_true", help="replace existing output files")
     sim.add_argument("--quiet", action="store_true", help="no progress bars or messages")
     effects = sim.add_argument_group(
-        "instrument effects", "switch an effect off to see what it does (TOML: [effects])")
+        "instrument effects", "switch an effect off (or an opt-in one on) to see what it does "
+                              "(TOML: [effects])")
     for effect in dataclasses.fields(Effects):
-        flag = effect.name.replace("_", "-")
-        effects.add_argument(f"--no-{flag}", dest=f"no_{effect.name}", action="store_true",
-                             help=f"switch off the {effect.name.replace('_', ' ')}")
+        flag, words = effect.name.replace("_", "-"), effect.name.replace("_", " ")
+        if effect.default:
+            effects.add_argument(f"--no-{flag}", dest=f"effect_{effect.name}", action="store_false",
+                                 default=None, help=f"switch off the {words}")
+        else:
+            effects.add_argument(f"--{flag}", dest=f"effect_{effect.name}", action="store_true",
+                                 default=None, help=f"switch on the {words} (off by default)")
 
     cmp_ = sub.add_parser("compare", help="compare a simulated map with an observed one")
     cmp_.add_argument("simulated", type=Path, help="gongsynth magnetogram FITS")
@@ -214,9 +219,10 @@ def _simulation_config(args):
             raise ValueError(f"--like {args.like}: {_cause(exc)} (expected a GONG full-disk FITS "
                              f"file)") from exc
         changes.update(taken)
-    off = {e.name: False for e in dataclasses.fields(Effects) if getattr(args, f"no_{e.name}")}
-    if off:
-        changes["effects"] = dataclasses.replace(config.effects, **off)
+    switched = {e.name: getattr(args, f"effect_{e.name}") for e in dataclasses.fields(Effects)
+                if getattr(args, f"effect_{e.name}") is not None}
+    if switched:
+        changes["effects"] = dataclasses.replace(config.effects, **switched)
     if args.shape is not None:
         changes["detector_shape"] = args.shape
     if args.atmosphere is not None:

@@ -111,6 +111,13 @@ class Effects:
         The dither added before truncation.
     truncation : bool
         Dropping the lowest bits after accumulation.
+    frame_seeing : bool
+        Seeing that changes from frame to frame: each plane accumulates its
+        own image motion (`gongsynth.stages.seeing`; instruments with
+        seeing only, and only with ``seeing`` on).
+    minute_average : bool
+        GONG's averaging: a run of several minutes is reduced minute by
+        minute and the maps averaged (`gongsynth.stages.averaging`).
 
     Examples
     --------
@@ -126,6 +133,8 @@ class Effects:
     read_noise: bool = True
     dither: bool = True
     truncation: bool = True
+    frame_seeing: bool = False
+    minute_average: bool = False
 
     def __post_init__(self):
         for f in fields(self):

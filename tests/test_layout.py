@@ -33,10 +33,11 @@ LAYERS = (
     ("gongsynth.sun.model_atmosphere",),
     ("gongsynth.stages", "gongsynth.stages.channels"),
     ("gongsynth.stages.scene",),
-    ("gongsynth.stages.optics", "gongsynth.stages.psf", "gongsynth.stages.imagers"),
+    ("gongsynth.stages.optics", "gongsynth.stages.psf", "gongsynth.stages.imagers",
+     "gongsynth.stages.seeing"),
     ("gongsynth.stages.camera",),
     # An instrument's reduction algorithm returns the shared stage's Observables.
-    ("gongsynth.stages.reduction", "gongsynth.instruments.hmi.observables",
+    ("gongsynth.stages.reduction", "gongsynth.stages.averaging", "gongsynth.instruments.hmi.observables",
      "gongsynth.instruments.hmi.noise"),
     ("gongsynth.products",),
     ("gongsynth.analysis",),

@@ -83,6 +83,24 @@ class GONGInstrument(InstrumentParameters):
         Resampling factor before binning to GONG pixels, 5 (paper, Sec. 3.2).
     seeing_fwhm : `~astropy.units.Quantity`, angle
         FWHM of the Gaussian seeing kernel, 3.6 arcsec (paper, Sec. 3.2).
+    seeing_wind_speed : `~astropy.units.Quantity`, speed
+        Frame-to-frame seeing (`gongsynth.stages.seeing`): speed of the
+        turbulence that moves the image, 5 m/s (a choice: a typical near-ground
+        daytime wind; Big Bear's header of 2009-09-05 reads 3.3 m/s).
+    seeing_outer_scale : `~astropy.units.Quantity`, length
+        Frame-to-frame seeing: the turbulence's outer scale L0, 20 m (median of
+        the GSM campaigns, Ziad et al. 2004, Appl. Opt. 43, 2316).
+    seeing_layer_height : `~astropy.units.Quantity`, length
+        Frame-to-frame seeing: effective height of the turbulence, 100 m (a
+        choice: daytime seeing comes mostly from the lowest few hundred
+        metres, Kellerer et al. 2012, A&A 542, A2); the image moves coherently
+        over aperture / height (58″).  0: the whole image moves together.
+    magnetogram_cadence : `~astropy.units.Quantity`, time
+        GONG reduces one magnetogram per minute (``ITIME = 60``) and its
+        standard product averages them (``N_USED = 9`` one-minute images in
+        the Big Bear file of 2009-09-05; Hill 2018, Space Weather 16, 1488):
+        with ``effects.minute_average`` a run longer than this is reduced
+        minute by minute and the magnetograms and Dopplergrams averaged.
     effective_area : `~astropy.units.Quantity`, area
         Effective collecting area, 0.6 cm² (paper, Sec. 3.2).
     quantum_efficiency : `~astropy.units.Quantity`, dimensionless
@@ -202,6 +220,10 @@ class GONGInstrument(InstrumentParameters):
     detector_shape: int = _plain(860, int, "detector side in pixels (GONG full disk)")
     supersampling: int = _plain(5, int, "resampling factor before binning (paper Sec. 3.2)")
     seeing_fwhm: u.Quantity = _param(3.6, u.arcsec, "Gaussian seeing FWHM (paper Sec. 3.2)")
+    seeing_wind_speed: u.Quantity = _param(5.0, u.m / u.s, "frame seeing: speed of the turbulence (a choice)")
+    seeing_outer_scale: u.Quantity = _param(20.0, u.m, "frame seeing: outer scale L0 (Ziad et al. 2004)")
+    seeing_layer_height: u.Quantity = _param(100.0, u.m, "frame seeing: height of the turbulence (a choice)")
+    magnetogram_cadence: u.Quantity = _param(1.0, u.min, "one magnetogram per minute (GONG headers, N_USED)")
     effective_area: u.Quantity = _param(0.6, u.cm**2, "effective collecting area (paper Sec. 3.2)")
     quantum_efficiency: u.Quantity = _param(0.16, u.dimensionless_unscaled, "CCD QE (paper Sec. 3.2)")
     gain: u.Quantity = _param(33.0, u.electron / u.adu, "ADU conversion factor (paper Sec. 3.2)")
@@ -405,7 +427,10 @@ _RANGES = {
                      "aperture", "plate_scale", "effective_area", "gain", "v0", "integration_half_width",
                      "quadrature_step", "reference_line_fwhm", "psf_radius", "flat_dust_radius_min",
                      "flat_dust_radius_max", "dark_glow_length"), "(0, inf)"),
-    **dict.fromkeys(("seeing_fwhm", "read_noise", "dither_start", "dither_step", "flat_dust_density",
+    **dict.fromkeys(("seeing_wind_speed", "seeing_outer_scale", "magnetogram_cadence"),
+                    "(0, inf)"),
+    **dict.fromkeys(("seeing_fwhm", "seeing_layer_height", "read_noise", "dither_start", "dither_step",
+                     "flat_dust_density",
                      "dark_level", "dark_glow", "dark_hot_factor"), "[0, inf)"),
     **dict.fromkeys(("detector_shape", "supersampling", "dither_interval", "dither_cycle"), "[1, inf)"),
     **dict.fromkeys(("flat_dust_depth_min", "flat_dust_depth_max", "dark_hot_fraction"), "[0, 1]"),
