@@ -7,11 +7,11 @@ and the table's format and use live in
 `gongsynth.analysis.cross_calibration_table`.
 
 How the instruments are compared (they have different plate scales: GONG
-2.5″, HMI 0.504″).  Every instrument observes the same built-in Sun (same
+2.5″, HMI 0.504″, MDI 1.986″).  Every instrument observes the same built-in Sun (same
 root seed: the same 3-D atmosphere, each instrument's line synthesised from
 it) at the same latitude, date and pointing, on a detector covering the same
 ``field`` of sky (one 1× tile: ``resolutions=(1,)``), each for its default
-duration (GONG 10 min, HMI 45 s).  Both magnetograms and their ground truths
+duration (GONG 10 min, HMI 45 s, MDI 1 min).  Both magnetograms and their ground truths
 (the true B_LOS averaged over each detector pixel, design §3.13, without any
 PSF: the same quantity for every instrument, decision 19) are then binned,
 flux-preserving, onto one grid of square cells of side ``resolution`` on the
@@ -148,7 +148,7 @@ def _cache_paths(cache, config):
     return cache / f"{stem}_magnetogram.fits", cache / f"{stem}_truth.fits"
 
 
-def cross_calibration_table(instruments=("gong", "hmi"), latitudes=TABLE_LATITUDES, seeds=(1, 2), *,
+def cross_calibration_table(instruments=("gong", "hmi", "mdi"), latitudes=TABLE_LATITUDES, seeds=(1, 2), *,
                             resolution=CROSS_RESOLUTION, field=CROSS_FIELD,
                             strength_bins=DEFAULT_STRENGTH_BINS, client=None, cache=None, progress=True,
                             **simulate_kwargs):
