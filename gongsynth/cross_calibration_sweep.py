@@ -165,8 +165,10 @@ def cross_calibration_table(instruments=("gong", "hmi", "mdi"), latitudes=TABLE_
 
     Parameters
     ----------
-    instruments : sequence of str
-        Names of the family (`gongsynth.instruments.names`), at least one.
+    instruments : sequence of str or `~gongsynth.instruments.base.Instrument`
+        Names of the family (`gongsynth.instruments.names`) or instrument
+        objects (e.g. one with parameters changed by ``replace``), at least
+        one, of distinct names (the table's ``instrument`` and ``target``).
     latitudes : `~astropy.units.Quantity`
         Viewing latitudes (default the papers' 0, 25, 45, 60, 70, 75°).
     seeds : sequence of int
@@ -191,15 +193,16 @@ def cross_calibration_table(instruments=("gong", "hmi", "mdi"), latitudes=TABLE_
     `~astropy.table.QTable`
         See `gongsynth.analysis.cross_calibration_table.tabulate_cross_calibration`.
     """
-    names = [family.get(name).name for name in instruments]
+    instruments = [family.get(instrument) for instrument in instruments]
+    names = [instrument.name for instrument in instruments]
     if not names or len(set(names)) != len(names):
         raise ValueError(f"instruments must name distinct instruments of the family, got {instruments!r}")
     latitudes = u.Quantity(latitudes, u.deg).ravel()
     seeds = [int(s) for s in seeds]
     if not seeds or latitudes.size == 0:
         raise ValueError("latitudes and seeds must each hold at least one value")
-    configs = [instrument_config(name, latitude, seed, field=field, **simulate_kwargs)
-               for latitude in latitudes for seed in seeds for name in names]
+    configs = [instrument_config(instrument, latitude, seed, field=field, **simulate_kwargs)
+               for latitude in latitudes for seed in seeds for instrument in instruments]
     maps = iter(simulate_instruments(configs, cache=cache, client=client, progress=progress))
     kwargs = dict(resolution=resolution, angle_bins=[0, 90] * u.deg, strength_bins=strength_bins)
     comparisons = []
