@@ -72,13 +72,14 @@ PAIRS = (("gong", "hmi"), ("gong", "mdi"), ("mdi", "hmi"), ("gong", "truth_gong"
          ("mdi", "truth_mdi"), ("gong", "gong_on_hmi"), ("gong", "gong_on_mdi"))
 
 
-def observe(name, *, date=DATE, seed=SEED, progress=False, cache=None):
+def observe(name, *, date=DATE, seed=SEED, progress=False, cache=None, sun=None):
     """One instrument's full-disk magnetogram and truth of the Sun of ``date`` (kept in ``cache``)."""
     paths = None if cache is None else [Path(cache) / f"{name}_{w}.fits" for w in ("magnetogram", "truth")]
     if paths and all(path.exists() for path in paths):
         return tuple(sunpy.map.Map(path) for path in paths)
     result = gongsynth.simulate(instrument=name, mode="full-disk", seed=seed, obstime=date,
-                                detector_shape=DETECTORS[name], progress=progress)
+                                detector_shape=DETECTORS[name], progress=progress,
+                                **({} if sun is None else {"sun": sun}))
     maps = (result.magnetogram, result.truth)
     for smap, path in zip(maps, paths or ()):
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -117,12 +118,12 @@ def strip_mask(chart, half_width=STRIP):
     return np.abs(offset) <= half_width
 
 
-def charts(date=DATE, seed=SEED, progress=False, cache=None):
+def charts(date=DATE, seed=SEED, progress=False, cache=None, sun=None):
     """Every instrument's chart, its truth's, and GONG's put on HMI's and MDI's scales."""
     header = carrington_grid(date)
     out = {}
     for name in DETECTORS:
-        magnetogram, truth = observe(name, date=date, seed=seed, progress=progress, cache=cache)
+        magnetogram, truth = observe(name, date=date, seed=seed, progress=progress, cache=cache, sun=sun)
         out[name] = on_carrington(magnetogram, header)
         out[f"truth_{name}"] = on_carrington(truth, header)
     for target in ("hmi", "mdi"):
@@ -130,9 +131,9 @@ def charts(date=DATE, seed=SEED, progress=False, cache=None):
     return out
 
 
-def build_table(date=DATE, seed=SEED, progress=False, cache=None):
+def build_table(date=DATE, seed=SEED, progress=False, cache=None, sun=None):
     """The comparisons of `PAIRS` on the central-meridian strip, one QTable."""
-    maps = charts(date, seed, progress, cache)
+    maps = charts(date, seed, progress, cache, sun)
     mask = strip_mask(maps["gong"])
     tables = []
     for a, b in PAIRS:
@@ -147,7 +148,8 @@ def build_table(date=DATE, seed=SEED, progress=False, cache=None):
                             capture_output=True, text=True).stdout.strip()
     out.meta.update({
         "runs": {name: f"gongsynth.simulate(instrument={name!r}, mode='full-disk', seed={seed}, "
-                       f"obstime={date!r}, detector_shape={side})" for name, side in DETECTORS.items()},
+                       f"obstime={date!r}, detector_shape={side}"
+                       + ("" if sun is None else f", sun={sun!r}") + ")" for name, side in DETECTORS.items()},
         "remap": f"each map binned onto {CELL} helioprojective cells (no PSF), reprojected (exact) onto "
                  f"360 x 180 CEA Carrington cells, divided by mu; cells within {STRIP} of the central "
                  "meridian",
@@ -178,8 +180,9 @@ def main(argv=None):
     parser.add_argument("--out", type=Path, help="write the table as ECSV")
     parser.add_argument("--summary", type=Path, help="write the slopes by band (reStructuredText)")
     parser.add_argument("--cache", type=Path, help="keep the runs' maps here (FITS): a rerun reads them")
+    parser.add_argument("--sun", help="the full-disk Sun (default: simulate's, e.g. 'model-atmosphere')")
     args = parser.parse_args(argv)
-    table = build_table(progress=True, cache=args.cache)
+    table = build_table(progress=True, cache=args.cache, sun=args.sun)
     small = summary(table)
     small.pprint(max_width=-1, max_lines=-1)
     if args.summary:

@@ -55,7 +55,8 @@ Usage (about 10 minutes on 2 cores; ``--cache`` resumes and shares the
 as-built runs with the conversion table's build, which uses the same
 configurations)::
 
-    python scripts/instrument_ablation.py --out gongsynth/data/instrument_ablation.ecsv --cache DIR
+    python scripts/instrument_ablation.py --out gongsynth/data/instrument_ablation.ecsv \
+        --summary docs/guide/instrument_ablation.txt --cache DIR
 """
 import argparse
 import dataclasses
@@ -172,10 +173,22 @@ def ablation_table(latitudes=LATITUDES, seeds=SEEDS, *, cache=None, progress=Tru
     return out
 
 
+def summary(table):
+    """The ablation as a small table of strings (the guide includes it)."""
+    labels = {"as_built": "nothing (as built)", "pixels_seeing": "pixels & seeing"}
+    rows = [[f"{row['latitude'].to_value(u.deg):g}", labels.get(str(row["variant"]), str(row["variant"])),
+             f"{row['gong_to_hmi']:.3f} ± {row['uncertainty']:.3f}", f"{row['gong_to_truth']:.3f}",
+             f"{row['hmi_to_truth']:.3f}", "" if row["variant"] == "as_built" else f"{row['share']:+.2f}"]
+            for row in table]
+    return QTable(rows=rows, names=["latitude (deg)", "switched off", "GONG -> HMI", "GONG -> truth",
+                                    "HMI -> truth", "share"])
+
+
 def main(argv=None):
     """Command line: compute the ablation, print it and (with --out) write it as ECSV."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[1])
     parser.add_argument("--out", type=Path, help="write the table as ECSV")
+    parser.add_argument("--summary", type=Path, help="write the guide's table (reStructuredText)")
     parser.add_argument("--cache", type=Path, help="folder for the runs' maps (resumable)")
     parser.add_argument("--latitudes", type=float, nargs="+", default=LATITUDES.to_value(u.deg),
                         help="viewing latitudes (deg)")
@@ -187,6 +200,8 @@ def main(argv=None):
               f"{row['gong_to_hmi']:.3f} +- {row['uncertainty']:.3f}  "
               f"GONG->truth {row['gong_to_truth']:.3f}  "
               f"HMI->truth {row['hmi_to_truth']:.3f}  share {row['share']:+.2f}")
+    if args.summary:
+        summary(table).write(args.summary, format="ascii.rst", overwrite=True)
     if args.out:
         table.write(args.out, format="ascii.ecsv", overwrite=True)
         print(f"wrote {args.out}")
