@@ -10,8 +10,8 @@ The ``gongsynth`` command line.
                        [--overwrite] [--quiet]
                        --out DIR
     gongsynth compare SIM.fits OBS.fits [--out FIGURE.png]
-    gongsynth calibrate IN.fits --out OUT.fits [--to truth|hmi] [--table TABLE.ecsv] [--overwrite]
-                        [--open-flux]
+    gongsynth calibrate IN.fits --out OUT.fits [--to truth|hmi|mdi|gong] [--instrument NAME]
+                        [--table TABLE.ecsv] [--overwrite] [--open-flux]
     gongsynth config --print-defaults
 
 Exit codes (`EXIT_CODES`; ``gongsynth --help`` lists them with what to do):
@@ -175,8 +175,12 @@ def build_parser():
                      help="calibration table (ECSV; default: the shipped one; with --to an instrument: the "
                           "conversion table)")
     cal.add_argument("--to", default="truth",
-                     help="'truth' (default: the true field) or an instrument's name, e.g. 'hmi': the map "
-                          "put on that instrument's scale with the predicted conversion factors")
+                     help="'truth' (default: the true field) or an instrument's name ('hmi', 'mdi', "
+                          "'gong'): the map put on that instrument's scale with the predicted conversion "
+                          "factors")
+    cal.add_argument("--instrument", dest="source", metavar="NAME",
+                     help="with --to an instrument: the map's own instrument ('gong', 'hmi', 'mdi') when "
+                          "its header does not say")
     cal.add_argument("--overwrite", action="store_true", help="replace an existing output file")
     cal.add_argument("--open-flux", dest="open_flux", action="store_true",
                      help="synoptic maps: also the PFSS open flux (source surface 2.5 R_sun) before and "
@@ -423,7 +427,7 @@ def _run_calibrate(args):
                          f"{', '.join(_FITS_SUFFIXES)} (.gz: compressed)")
     check_writable([args.out], args.overwrite)
     smap = load_observation(args.magnetogram)
-    calibrated = calibrate(smap, table=args.table, force=args.force, to=args.to)
+    calibrated = calibrate(smap, table=args.table, force=args.force, to=args.to, instrument=args.source)
     if args.open_flux:
         _record_open_flux(smap, calibrated)
     with atomic_path(args.out, overwrite=args.overwrite) as tmp:

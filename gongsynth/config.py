@@ -123,6 +123,8 @@ class Effects:
     --------
     >>> Effects(photon_noise=False).off
     ('photon_noise',)
+    >>> Effects(minute_average=True).opted_in
+    ('minute_average',)
     """
 
     psf: bool = True
@@ -143,8 +145,13 @@ class Effects:
 
     @property
     def off(self):
-        """Names of the effects switched off."""
-        return tuple(f.name for f in fields(self) if not getattr(self, f.name))
+        """Names of the effects on by default that are switched off."""
+        return tuple(f.name for f in fields(self) if f.default and not getattr(self, f.name))
+
+    @property
+    def opted_in(self):
+        """Names of the opt-in effects (off by default) that are switched on."""
+        return tuple(f.name for f in fields(self) if not f.default and getattr(self, f.name))
 
     @classmethod
     def from_dict(cls, table, *, where="effects"):

@@ -7,11 +7,11 @@ and the table's format and use live in
 `gongsynth.analysis.cross_calibration_table`.
 
 How the instruments are compared (they have different plate scales: GONG
-2.5″, HMI 0.504″).  Every instrument observes the same built-in Sun (same
+2.5″, HMI 0.504″, MDI 1.986″).  Every instrument observes the same built-in Sun (same
 root seed: the same 3-D atmosphere, each instrument's line synthesised from
 it) at the same latitude, date and pointing, on a detector covering the same
 ``field`` of sky (one 1× tile: ``resolutions=(1,)``), each for its default
-duration (GONG 10 min, HMI 45 s).  Both magnetograms and their ground truths
+duration (GONG 10 min, HMI 45 s, MDI 1 min).  Both magnetograms and their ground truths
 (the true B_LOS averaged over each detector pixel, design §3.13, without any
 PSF: the same quantity for every instrument, decision 19) are then binned,
 flux-preserving, onto one grid of square cells of side ``resolution`` on the
@@ -116,7 +116,7 @@ def simulate_instruments(configs, *, cache=None, client=None, workers=None, prog
     return out
 
 
-def cross_calibration_table(instruments=("gong", "hmi"), latitudes=TABLE_LATITUDES, seeds=(1, 2), *,
+def cross_calibration_table(instruments=("gong", "hmi", "mdi"), latitudes=TABLE_LATITUDES, seeds=(1, 2), *,
                             resolution=CROSS_RESOLUTION, field=CROSS_FIELD,
                             strength_bins=DEFAULT_STRENGTH_BINS, client=None, workers=None, cache=None,
                             progress=True, **simulate_kwargs):
@@ -133,8 +133,10 @@ def cross_calibration_table(instruments=("gong", "hmi"), latitudes=TABLE_LATITUD
 
     Parameters
     ----------
-    instruments : sequence of str
-        Names of the family (`gongsynth.instruments.names`), at least one.
+    instruments : sequence of str or `~gongsynth.instruments.base.Instrument`
+        Names of the family (`gongsynth.instruments.names`) or instrument
+        objects (e.g. one with parameters changed by ``replace``), at least
+        one, of distinct names (the table's ``instrument`` and ``target``).
     latitudes : `~astropy.units.Quantity`
         Viewing latitudes (default the papers' 0, 25, 45, 60, 70, 75°).
     seeds : sequence of int
@@ -162,15 +164,16 @@ def cross_calibration_table(instruments=("gong", "hmi"), latitudes=TABLE_LATITUD
     `~astropy.table.QTable`
         See `gongsynth.analysis.cross_calibration_table.tabulate_cross_calibration`.
     """
-    names = [family.get(name).name for name in instruments]
+    instruments = [family.get(instrument) for instrument in instruments]
+    names = [instrument.name for instrument in instruments]
     if not names or len(set(names)) != len(names):
         raise ValueError(f"instruments must name distinct instruments of the family, got {instruments!r}")
     latitudes = u.Quantity(latitudes, u.deg).ravel()
     seeds = [int(s) for s in seeds]
     if not seeds or latitudes.size == 0:
         raise ValueError("latitudes and seeds must each hold at least one value")
-    configs = [instrument_config(name, latitude, seed, field=field, **simulate_kwargs)
-               for latitude in latitudes for seed in seeds for name in names]
+    configs = [instrument_config(instrument, latitude, seed, field=field, **simulate_kwargs)
+               for latitude in latitudes for seed in seeds for instrument in instruments]
     maps = iter(simulate_instruments(configs, cache=cache, client=client, workers=workers,
                                      progress=progress))
     kwargs = dict(resolution=resolution, angle_bins=[0, 90] * u.deg, strength_bins=strength_bins)

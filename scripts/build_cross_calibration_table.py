@@ -5,17 +5,17 @@ What it runs (`gongsynth.cross_calibration_sweep.cross_calibration_table`):
 the default built-in Sun (the 3-D model atmosphere through LTE radiative
 transfer: a 98 Mm box with a sunspot in 256² columns of 384 km, the Sun of
 the shipped calibration table) observed by GONG (its default: 10-minute
-magnetogram, 2.5″ pixels) and by HMI (its default: the 45-s magnetogram,
-0.504″ pixels), each on a detector covering the same 160″ field at the
+magnetogram, 2.5″ pixels), by HMI (its default: the 45-s magnetogram,
+0.504″ pixels) and by MDI (its default: the 1-minute level-1.8 magnetogram,
+1.986″ pixels), each on a detector covering the same 160″ field at the
 papers' viewing latitudes 0, 25, 45, 60, 70 and 75 deg, with root seeds 1 and
-2 (24 runs).  Both magnetograms and their pixel-averaged truths are binned,
+2 (36 runs).  The magnetograms and their pixel-averaged truths are binned,
 flux-preserving, onto common 10″ cells anchored at the field centre, where
 `gongsynth.cross_calibrate` gives the OLS-bisector factor between the
 instruments and from each to the truth (over all field strengths and in
 groups of field strength), averaged over the seeds with their standard error.
 
-How to regenerate it (about 25 minutes of CPU on 2 cores; longer on a busy
-machine)::
+How to regenerate it (about 10 minutes on 2 cores; longer on a busy machine)::
 
     python scripts/build_cross_calibration_table.py --overwrite [--cache DIR]
 
@@ -37,7 +37,7 @@ from gongsynth.analysis.cross_calibration_table import DEFAULT_CROSS_TABLE
 from gongsynth.cross_calibration_sweep import cross_calibration_table
 
 SEEDS = (1, 2)
-INSTRUMENTS = ("gong", "hmi")
+INSTRUMENTS = ("gong", "hmi", "mdi")
 
 
 def main(argv=None):

@@ -126,7 +126,10 @@ def factors(conversion):
     from gongsynth.analysis.cross_calibration_table import conversion_factors
 
     columns = {}
-    for source, target in (("gong", "hmi"), ("gong", "truth"), ("hmi", "truth")):
+    pairs = (("gong", "hmi"), ("gong", "mdi"), ("mdi", "hmi"), ("gong", "truth"), ("hmi", "truth"),
+             ("mdi", "truth"))
+    present = set(conversion["instrument"])
+    for source, target in ((a, b) for a, b in pairs if {a, b} - {"truth"} <= present):
         latitude, factor, sigma = conversion_factors(conversion, source, target)
         columns["latitude (deg)"] = [f"{v:g}" for v in latitude.to_value(u.deg)]
         columns[f"{source.upper()} -> {target if target == 'truth' else target.upper()}"] = [

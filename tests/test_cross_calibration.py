@@ -181,14 +181,22 @@ def test_shipped_conversion_table_loads_with_units_and_provenance():
     assert sorted(set(table["latitude"].to_value(u.deg))) == [0, 25, 45, 60, 70, 75]
     for key in ("seeds", "instruments", "resolution", "field", "input_sun", "gongsynth_version", "method"):
         assert key in table.meta, key
-    assert set(table.meta["instruments"]) == {"gong", "hmi"}
+    assert set(table.meta["instruments"]) == {"gong", "hmi", "mdi"}
     assert table.meta["instruments"]["hmi"]["duration"] == "0.75 min"
-    latitude, factor, uncertainty = conversion_factors(table, "gong", "hmi")
-    assert latitude.size == 6 and np.all(np.isfinite(factor)) and np.all(uncertainty >= 0)
-    # There and back is the identity: the bisector slopes of one seed are exactly reciprocal, their means
-    # over the seeds to the square of the seeds' relative scatter (~1e-4 here).
-    _, back, _ = conversion_factors(table, "hmi", "gong")
-    assert np.allclose(factor * back, 1, rtol=1e-3)
+    assert table.meta["instruments"]["mdi"]["duration"] == "1.0 min"
+    assert table.meta["instruments"]["mdi"]["detector_shape"] == 82
+    names = ("gong", "hmi", "mdi")
+    for source in names:
+        for target in [*names, "truth"]:
+            if target == source:
+                continue
+            latitude, factor, uncertainty = conversion_factors(table, source, target)
+            assert latitude.size == 6 and np.all(np.isfinite(factor)) and np.all(uncertainty >= 0)
+            if target != "truth":
+                # There and back is the identity: the bisector slopes of one seed are exactly reciprocal,
+                # their means over the seeds to the square of the seeds' relative scatter (~1e-4 here).
+                _, back, _ = conversion_factors(table, target, source)
+                assert np.allclose(factor * back, 1, rtol=1e-3), (source, target)
 
 
 def test_calibrate_to_hmi_multiplies_by_the_factor_at_each_viewing_angle():
@@ -259,8 +267,10 @@ def test_the_table_builder_compares_every_pair_and_caches_the_runs(tmp_path, mon
                                resolution_map=np.ones(truth.shape))
 
     monkeypatch.setattr(run_cache, "simulate", fake_run)
-    kwargs = dict(latitudes=[0] * u.deg, seeds=[1], resolution=10 * u.arcsec, strength_bins=[0, np.inf] * u.G,
-                  sun="milne-eddington", cache=tmp_path, progress=False)
+    # A name and an instrument object (the ablation script passes changed instruments).
+    kwargs = dict(instruments=("gong", gongsynth.instruments.get("hmi")), latitudes=[0] * u.deg, seeds=[1],
+                  resolution=10 * u.arcsec, strength_bins=[0, np.inf] * u.G, sun="milne-eddington",
+                  cache=tmp_path, progress=False)
     table = sweep.cross_calibration_table(**kwargs)
     assert calls == ["gong", "hmi"]
     factor = {(r["instrument"], r["target"]): r["factor"] for r in table}
@@ -274,3 +284,90 @@ def test_the_table_builder_compares_every_pair_and_caches_the_runs(tmp_path, mon
     cached = sweep.simulate_instruments(configs, cache=tmp_path, progress=False)
     assert calls == ["gong", "hmi"]
     assert np.array_equal(cached[0][0].data, truth / 1.5) and np.array_equal(cached[1][1].data, truth)
+
+
+def _three_instrument_table():
+    """GONG sees the truth / 1.8, HMI / 1.3, MDI / 1.5 at 0°; all / 1.2, 1.1, 1.15 at 60° (stand-ins)."""
+    seen = {0: {"gong": 1.8, "hmi": 1.3, "mdi": 1.5}, 60: {"gong": 1.2, "hmi": 1.1, "mdi": 1.15}}
+    return tabulate_cross_calibration([
+        dict(latitude=lat * u.deg, mu=np.cos(np.deg2rad(lat)), instrument=a, target=b, seed=1,
+             table=_row(seen[lat][a] / seen[lat].get(b, 1.0)))
+        for lat in seen for a in seen[lat] for b in [*seen[lat], "truth"] if a != b])
+
+
+def test_calibrate_to_mdi_and_between_any_two_instruments_of_the_table():
+    table = _three_instrument_table()
+    values = np.full((41, 41), 10.0)
+    gong = _disk_map(values, 50, telescope="NSO-GONG")
+    on_mdi = calibrate(gong, to="MDI", table=table)
+    assert on_mdi.meta["calto"] == "mdi" and "GONG put on MDI" in on_mdi.meta["history"]
+    assert on_mdi.data[20, 20] == pytest.approx(10 * 1.8 / 1.5)
+    # A real MDI map (TELESCOP SOHO, INSTRUME MDI) to HMI's scale and back to GONG's.
+    mdi = _disk_map(values, 50, telescope="SOHO")
+    mdi.meta["instrume"] = "MDI"
+    assert calibrate(mdi, to="hmi", table=table).data[20, 20] == pytest.approx(10 * 1.5 / 1.3)
+    assert calibrate(mdi, to="gong", table=table).data[20, 20] == pytest.approx(10 * 1.5 / 1.8)
+    theta = gongsynth.analysis.apply_calibration.viewing_angle(mdi).to_value(u.deg)
+    expected = 10 * np.interp(np.clip(theta, 0, 60), [0, 60], [1.5 / 1.3, 1.15 / 1.1])
+    assert np.allclose(calibrate(mdi, to="hmi", table=table).data, expected, equal_nan=True)
+    # to="truth" with the conversion table: MDI's own factor.
+    assert calibrate(mdi, to="truth", table=table).data[20, 20] == pytest.approx(15.0)
+    with pytest.raises(ValueError, match="MDI map already"):
+        calibrate(mdi, to="mdi", table=table)
+    with pytest.raises(ValueError, match=r"to must be one of \('truth', 'gong', 'hmi', 'mdi'\), got 'solis'"):
+        calibrate(gong, to="solis", table=table)
+    with pytest.raises(ValueError, match="to must be one of"):
+        calibrate(gong, to=None, table=table)
+    with pytest.raises(ValueError, match="instrument must be one of"):
+        calibrate(gong, to="mdi", table=table, instrument="spm")
+    with pytest.raises(ValueError, match=r"cannot tell which instrument.*--instrument"):
+        calibrate(_disk_map(values, 50), to="mdi", table=table)
+
+
+def test_cli_calibrate_to_mdi_with_the_shipped_table(tmp_path, capsys):
+    from gongsynth.cli import main
+
+    gong = _disk_map(np.full((41, 41), 10.0), 50, telescope="NSO-GONG")
+    source = tmp_path / "gong.fits"
+    gong.save(source)
+    out = tmp_path / "on_mdi.fits"
+    assert main(["calibrate", str(source), "--out", str(out), "--to", "mdi"]) == 0
+    on_mdi = sunpy.map.Map(out)
+    latitude, factor, _ = conversion_factors(read_cross_calibration_table(), "gong", "mdi")
+    assert on_mdi.meta["calto"] == "mdi" and latitude[0] == 0 * u.deg
+    assert on_mdi.data[20, 20] == pytest.approx(10 * factor[0])
+    # A header that names no instrument: exit 2 saying so, unless --instrument names it.
+    plain = tmp_path / "plain.fits"
+    _disk_map(np.full((41, 41), 10.0), 50).save(plain)
+    assert main(["calibrate", str(plain), "--out", str(tmp_path / "x.fits"), "--to", "mdi"]) == 2
+    assert "--instrument" in capsys.readouterr().err
+    assert main(["calibrate", str(plain), "--out", str(tmp_path / "y.fits"), "--to", "mdi",
+                 "--instrument", "gong"]) == 0
+    assert sunpy.map.Map(tmp_path / "y.fits").data[20, 20] == pytest.approx(10 * factor[0])
+    assert main(["calibrate", str(source), "--out", str(tmp_path / "z.fits"), "--to", "solis"]) == 2
+
+
+def test_the_ablation_moves_hmi_to_ni_i_without_changing_its_filters():
+    """scripts/instrument_ablation.py's 'line' switch: the same filtergrams, in mÅ from the line, on Ni I."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "scripts" / "instrument_ablation.py"
+    if not path.exists():
+        pytest.skip("needs a source checkout")
+    spec = importlib.util.spec_from_file_location("instrument_ablation", path)
+    ablation = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(ablation)
+    hmi = gongsynth.instruments.get("hmi")
+    gong, nickel, effects = ablation.variant(("line",))
+    assert nickel.line == gongsynth.instruments.get("gong").line and nickel.name == "hmi"
+    assert nickel.line_wavelength == gongsynth.instruments.get("mdi").line_wavelength
+    offsets = np.linspace(-600, 600, 241) * u.Unit("mAA")
+    assert np.allclose(nickel.responses(nickel.line_wavelength + offsets),
+                       hmi.responses(hmi.line_wavelength + offsets), rtol=1e-6, atol=1e-9)
+    assert gong == gongsynth.instruments.get("gong") and effects.off == ()
+    # Everything at once: both on Ni I with the Sun's Lande factor, GONG on HMI's pixels, no PSF, no noise.
+    gong, nickel, effects = ablation.variant(ablation.CAUSES)
+    assert gong.plate_scale == hmi.plate_scale and gong.seeing_fwhm == 0 * u.arcsec
+    assert float(gong.lande_g) == float(nickel.lande_g) == 1.426
+    assert set(effects.off) == {"psf", "photon_noise", "read_noise"}

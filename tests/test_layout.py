@@ -34,7 +34,7 @@ LAYERS = (
     ("gongsynth.stages", "gongsynth.stages.channels"),
     ("gongsynth.stages.scene",),
     ("gongsynth.stages.optics", "gongsynth.stages.psf", "gongsynth.stages.imagers",
-     "gongsynth.stages.seeing"),
+     "gongsynth.stages.seeing", "gongsynth.stages.pixelization"),
     ("gongsynth.stages.camera",),
     # An instrument's reduction algorithm returns the shared stage's Observables.
     ("gongsynth.stages.reduction", "gongsynth.stages.averaging", "gongsynth.instruments.hmi.observables",

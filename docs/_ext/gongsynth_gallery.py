@@ -17,6 +17,7 @@ ORDER = [
     "plot_frame_schedule.py",
     "plot_magnetograms.py",
     "plot_one_sun_gong_and_hmi.py",
+    "plot_why_instruments_disagree.py",
     "plot_full_disk.py",
     "plot_full_disk_vs_real.py",
     "plot_compare_real.py",

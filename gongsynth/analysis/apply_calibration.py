@@ -18,7 +18,7 @@ Rules (documented in the guide's calibration page):
   (the papers' quiet-Sun limit), the sunspot curve elsewhere (or the
   quiet-Sun curve if the table has no sunspot rows).  Off-disk and NaN
   pixels stay NaN.
-- **To another instrument's scale** (``to="hmi"``): the map's instrument is
+- **To another instrument's scale** (``to="hmi"``, ``to="mdi"``, ``to="gong"``): the map's instrument is
   read from its header (`map_instrument`); each pixel is multiplied by the
   predicted conversion factor at its viewing angle, interpolated in θ like
   the curves, from the conversion table
@@ -144,7 +144,7 @@ def map_instrument(smap):
     if "MDI" in instrument or "MDI" in telescope:
         return "mdi"
     raise ValueError(f"cannot tell which instrument made smap (TELESCOP = {telescope!r}, INSTRUME = "
-                     f"{instrument!r}): pass instrument= to calibrate")
+                     f"{instrument!r}): pass instrument= to calibrate (CLI: --instrument)")
 
 
 def _interpolation(theta, angles):
@@ -205,12 +205,14 @@ def calibrate(smap, *, table=None, force=False, to="truth", instrument=None):
         ``"truth"`` (default): the papers' curves, truth = g(measured, θ)
         (with a conversion table as ``table``: the map's instrument's
         predicted factor to the truth instead, for any instrument).
-        An instrument's name (``"hmi"``; ``"mdi"`` once tabulated): the map
-        on that instrument's scale, measured × the predicted factor at each
-        pixel's θ.
+        An instrument's name (``"hmi"``, ``"mdi"``, ``"gong"``): the map on
+        that instrument's scale, measured × the predicted factor at each
+        pixel's θ (any ordered pair of the conversion table's instruments:
+        the shipped one has GONG, HMI and MDI).
     instrument : str, optional
-        The map's instrument for ``to`` other than ``"truth"``; default read
-        from its header (`map_instrument`).
+        The map's instrument (``"gong"``, ``"hmi"``, ``"mdi"``) for ``to``
+        other than ``"truth"``; default read from its header
+        (`map_instrument`, which raises ValueError when the header names none).
 
     Returns
     -------
@@ -240,9 +242,7 @@ def calibrate(smap, *, table=None, force=False, to="truth", instrument=None):
     if not force and content.upper().startswith("TRUE B_LOS"):
         raise ValueError(f"the map is a ground-truth map (CONTENT = {content!r}), not a measurement: "
                          f"calibrate the magnetogram, or force it (calibrate --force)")
-    if not isinstance(to, str) or not to:
-        raise ValueError(f"to must be 'truth' or an instrument's name, got {to!r}")
-    to = to.lower()
+    to = _scale_name(to, "to", truth=True)
     if to != "truth" or (hasattr(table, "colnames") and "target" in table.colnames):
         return _convert(smap, to, table, instrument)
     if instrument is not None:
@@ -270,9 +270,19 @@ def calibrate(smap, *, table=None, force=False, to="truth", instrument=None):
     return sunpy.map.Map(out, meta)
 
 
+def _scale_name(name, argument, *, truth=False):
+    """A scale's name in lower case: an instrument of the family (or ``"truth"``); ValueError otherwise."""
+    from gongsynth import instruments
+
+    known = (("truth",) if truth else ()) + tuple(instruments.names())
+    if not isinstance(name, str) or name.lower() not in known:
+        raise ValueError(f"{argument} must be one of {known}, got {name!r}")
+    return name.lower()
+
+
 def _convert(smap, to, table, instrument):
     """The map on instrument ``to``'s scale: measured × the predicted factor at each pixel's θ."""
-    source = map_instrument(smap) if instrument is None else str(instrument).lower()
+    source = map_instrument(smap) if instrument is None else _scale_name(instrument, "instrument")
     if source == to:
         raise ValueError(f"smap is a {source.upper()} map already: to={to!r} would change nothing")
     if table is None or not hasattr(table, "colnames"):

@@ -114,7 +114,7 @@ def read_cross_calibration_table(path=None):
     --------
     >>> table = read_cross_calibration_table()
     >>> table["latitude"].unit, sorted(str(t) for t in set(table["target"]))
-    (Unit("deg"), ['gong', 'hmi', 'truth'])
+    (Unit("deg"), ['gong', 'hmi', 'mdi', 'truth'])
     """
     if path is None:
         resource = importlib.resources.files("gongsynth") / "data" / DEFAULT_CROSS_TABLE

@@ -6,24 +6,28 @@ The PSF itself (Airy ⊗ seeing, paper Sec. 3.2, design §3.9) is modelled in
 are importable from here too.  Both effects can be switched off: ``psf=False``
 (no PSF at all, pixel averages only) and ``seeing=False`` (diffraction only).
 
-Pixelization follows the paper: bilinear resampling to exactly
-``supersampling`` × the detector pixels, then ``supersampling`` ×
-``supersampling`` binning.  Both steps are linear and separable, so they are
-applied as one sparse matrix per axis.  All functions work on any stack
+Pixelization (`gongsynth.stages.pixelization`, `pixelize` importable from
+here too) follows the paper: bilinear resampling to exactly ``supersampling``
+× the detector pixels, then binning.  All functions work on any stack
 ``(..., ny, nx)``: the instrument's K planes, or the true B_LOS pushed through the
 same geometry.
 """
-import functools
 import math
 
 import astropy.constants as const
 import astropy.units as u
 import numpy as np
 import scipy.fft
-import scipy.sparse
 
 from gongsynth import instruments
 from gongsynth.stages.imagers import BandImager, BandLimitedImager, ExactImager, image_planes, pixel_means
+from gongsynth.stages.pixelization import (
+    PIXELIZE_METHODS,
+    check_stack,
+    pixelize,
+    split_unit,
+    with_unit,
+)
 from gongsynth.stages.psf import (
     fft_workers,
     normalize_kernel,
@@ -33,7 +37,7 @@ from gongsynth.stages.psf import (
     wrapped_kernel,
 )
 from gongsynth.stages.scene.scene import BOUNDARIES, DeferredStack
-from gongsynth.validation import check_finite, check_quantity
+from gongsynth.validation import check_quantity
 
 __all__ = [
     "psf_profile",
@@ -60,25 +64,6 @@ def _resolve_kernel(psf, seeing, scale, inst):
         raise ValueError("seeing=False applies to the instrument PSF; a user psf kernel is used as "
                          "given (pass psf=True for the diffraction-limited instrument PSF)")
     return normalize_kernel(psf)
-
-
-def _split_unit(stack, name):
-    if isinstance(stack, u.Quantity):
-        return stack.value, stack.unit
-    return np.asarray(stack), None
-
-
-def _with_unit(values, unit):
-    return values if unit is None else u.Quantity(values, unit, copy=False)
-
-
-def _check_stack(values, name):
-    if values.ndim < 2:
-        raise ValueError(f"{name} must have at least 2 dimensions (..., ny, nx), got shape {values.shape}")
-    if not np.issubdtype(values.dtype, np.floating):
-        values = values.astype(float)
-    check_finite(values, name)
-    return values
 
 
 def convolve(stack, kernel, *, boundary="periodic", workers=None):
@@ -114,13 +99,13 @@ def convolve(stack, kernel, *, boundary="periodic", workers=None):
     >>> float(out.sum()), float(out[3, 3])
     (1.0, 0.1111111111111111)
     """
-    values, unit = _split_unit(stack, "stack")
-    values = _check_stack(values, "stack")
+    values, unit = split_unit(stack, "stack")
+    values = check_stack(values, "stack")
     out = np.empty_like(values)
     result = out.reshape((-1,) + values.shape[-2:])
     for i, conv in enumerate(_convolved_planes(values, kernel, boundary, workers)):
         result[i] = conv
-    return _with_unit(out, unit)
+    return with_unit(out, unit)
 
 
 def _convolved_planes(values, kernel, boundary, workers):
@@ -162,136 +147,6 @@ def _convolved_planes(values, kernel, boundary, workers):
         # With pads (p, q): field pixel j sits at padded index j + p, and the
         # circular convolution with the centred kernel keeps it there.
         yield conv[pads[0][0]:pads[0][0] + ny, pads[1][0]:pads[1][0] + nx]
-
-
-@functools.lru_cache(maxsize=32)
-def _axis_operator(n_in, n_det, factor, periodic, method="bilinear"):
-    """Sparse (n_det, n_in) matrix: bilinear resampling to n_det*factor samples, then mean of factor."""
-    if method == "area":
-        return _area_operator(n_in, n_det)
-    n_fine = n_det * factor
-    m = np.arange(n_fine)
-    # Pixel centres: fine pixel m covers the same field as input pixel coordinate t.
-    t = (m + 0.5) * (n_in / n_fine) - 0.5
-    i0 = np.floor(t).astype(np.int64)
-    f = t - i0
-    i1 = i0 + 1
-    if periodic:
-        i0 %= n_in
-        i1 %= n_in
-    else:
-        i0 = np.clip(i0, 0, n_in - 1)
-        i1 = np.clip(i1, 0, n_in - 1)
-    rows = np.concatenate([m // factor, m // factor])
-    cols = np.concatenate([i0, i1])
-    data = np.concatenate([1 - f, f]) / factor
-    op = scipy.sparse.csr_matrix((data, (rows, cols)), shape=(n_det, n_in))
-    op.sum_duplicates()
-    return op
-
-
-def _area_operator(n_in, n_det):
-    """Sparse (n_det, n_in) matrix: overlap of each detector pixel with the input pixels."""
-    width = n_in / n_det  # detector pixel in input pixels
-    start = np.arange(n_det) * width
-    first = np.floor(start).astype(np.int64)
-    span = int(math.ceil(width)) + 1
-    n = first[:, None] + np.arange(span)[None, :]
-    overlap = np.clip(np.minimum(start[:, None] + width, n + 1) - np.maximum(start[:, None], n), 0, None)
-    rows = np.repeat(np.arange(n_det), span)
-    cols = np.clip(n, 0, n_in - 1).ravel()
-    op = scipy.sparse.csr_matrix(((overlap / width).ravel(), (rows, cols)), shape=(n_det, n_in))
-    op.sum_duplicates()
-    op.eliminate_zeros()
-    return op
-
-
-def _detector_count(n, scale, plate, name):
-    count = n * scale / plate
-    nearest = round(count)
-    if nearest < 1 or abs(count - nearest) > 1e-6 * max(count, 1):
-        raise ValueError(
-            f"{name}: the field ({n} pixels of {scale:g} arcsec = {n * scale:g} arcsec) must be a "
-            f"whole number of detector pixels of {plate:g} arcsec, got {count:.6g}"
-        )
-    return nearest
-
-
-#: Resampling methods of `pixelize`.
-PIXELIZE_METHODS = ("bilinear", "area")
-
-
-@u.quantity_input
-def pixelize(stack, pixel_scale: u.arcsec, *, instrument=None, periodic=False, method="bilinear"):
-    """
-    Resample a stack bilinearly to ``supersampling`` × detector pixels, then bin.
-
-    Paper Sec. 3.2: the field is resampled to exactly ``instrument.supersampling``
-    (5) samples per detector pixel (``instrument.plate_scale``, 2.5″) with
-    bilinear interpolation and binned ``supersampling`` × ``supersampling``.
-    The result is the mean over each detector pixel (surface-brightness units
-    are kept; multiply by the pixel solid angle for a flux).  When the input
-    already has that sampling (the default grid of every gongsynth scene) the
-    resampling is the identity and flux is conserved exactly; from another
-    grid (the paper's 4096² over 860 pixels) bilinear interpolation conserves
-    the total to ~1e-6 after the PSF (~2e-5 without).  ``method="area"``
-    instead averages the input pixels' overlap with each detector pixel,
-    which conserves flux exactly on any grid.
-
-    Parameters
-    ----------
-    stack : array_like or `~astropy.units.Quantity`
-        Shape ``(..., ny, nx)``, any unit (kept).
-    pixel_scale : `~astropy.units.Quantity`
-        Sampling of ``stack`` on the sky (arcsec per pixel).  The field,
-        ``ny * pixel_scale`` by ``nx * pixel_scale``, must be a whole number of
-        detector pixels.
-    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
-        Supplies ``plate_scale`` and ``supersampling``.
-    periodic : bool
-        Interpolate across the edges with wrap-around (periodic scenes) rather
-        than holding the edge value.
-    method : {"bilinear", "area"}
-        ``"bilinear"``: the paper's resampling to ``supersampling`` samples per
-        detector pixel, then binning; ``"area"``: exact overlap averaging.
-
-    Returns
-    -------
-    `numpy.ndarray` or `~astropy.units.Quantity`
-        Shape ``(..., ny_det, nx_det)``, float64, unit of ``stack``.
-
-    Examples
-    --------
-    >>> import astropy.units as u
-    >>> import numpy as np
-    >>> img = np.arange(100.0).reshape(10, 10)
-    >>> pixelize(img, 0.5 * u.arcsec).shape   # 5 arcsec field -> 2 x 2 GONG pixels
-    (2, 2)
-    """
-    inst = instruments.get(instrument)
-    if method not in PIXELIZE_METHODS:
-        raise ValueError(f"method must be one of {PIXELIZE_METHODS}, got {method!r}")
-    values, unit = _split_unit(stack, "stack")
-    values = _check_stack(values, "stack")
-    scale = float(pixel_scale.to_value(u.arcsec))
-    if not (math.isfinite(scale) and scale > 0):
-        raise ValueError(f"pixel_scale must be positive and finite, got {pixel_scale}")
-    plate = inst.plate_scale.to_value(u.arcsec)
-    ny, nx = values.shape[-2:]
-    ndy = _detector_count(ny, scale, plate, "pixelize")
-    ndx = _detector_count(nx, scale, plate, "pixelize")
-    planes = values.reshape((-1, ny, nx))
-    factor = inst.supersampling
-    if (ny, nx) == (ndy * factor, ndx * factor):
-        # Exactly `factor` samples per pixel: resampling is the identity, binning a mean.
-        out = planes.reshape(-1, ndy, factor, ndx, factor).mean(axis=(2, 4), dtype=np.float64)
-        return _with_unit(out.reshape(values.shape[:-2] + (ndy, ndx)), unit)
-    opy = _axis_operator(ny, ndy, factor, bool(periodic), method)
-    opx = _axis_operator(nx, ndx, factor, bool(periodic), method)
-    out = np.empty((planes.shape[0], ndy, ndx))
-    for i, plane in enumerate(planes):
-        out[i] = (opx @ (opy @ plane).T).T
-    return _with_unit(out.reshape(values.shape[:-2] + (ndy, ndx)), unit)
 
 
 def _imager(shape, pixel_scale, inst, kernel, boundary, dtype, workers, band_limited=True):
@@ -406,8 +261,8 @@ def observe(stack, pixel_scale: u.arcsec, *, instrument=None, psf=True, seeing=T
     periodic = boundary == "periodic"
     if kernel is None:
         return pixelize(stack, pixel_scale, instrument=inst, periodic=periodic, method=method)
-    values, unit = _split_unit(stack, "stack")
-    values = _check_stack(values, "stack")
+    values, unit = split_unit(stack, "stack")
+    values = check_stack(values, "stack")
     imager = _imager(values.shape[-2:], pixel_scale, inst, kernel, boundary, values.dtype, workers,
                      _band_limited(band_limited, psf, inst))
     if imager is not None:
@@ -415,12 +270,12 @@ def observe(stack, pixel_scale: u.arcsec, *, instrument=None, psf=True, seeing=T
         out = np.empty((planes.shape[0],) + imager.detector_shape)
         for i, plane in enumerate(planes):
             out[i] = imager(plane)
-        return _with_unit(out.reshape(values.shape[:-2] + imager.detector_shape), unit)
+        return with_unit(out.reshape(values.shape[:-2] + imager.detector_shape), unit)
     # Plane by plane: PSF then pixelization, so no convolved copy of the stack is held.
     planes = [pixelize(conv, pixel_scale, instrument=inst, periodic=periodic, method=method)
               for conv in _convolved_planes(values, kernel, boundary, workers)]
     out = np.stack(planes).reshape(values.shape[:-2] + planes[0].shape)
-    return _with_unit(out, unit)
+    return with_unit(out, unit)
 
 
 def photometric_factor(instrument=None):
@@ -560,7 +415,7 @@ def image_scene(light, truth=None, instrument=None, *, psf=True, seeing=True, wo
             raise u.UnitsError(f"light.data must be in {unit}, got {radiance_unit}")
     else:
         radiance = check_quantity(light.data, unit, "light.data")
-        values, radiance_unit = _check_stack(radiance.value, "light.data"), radiance.unit
+        values, radiance_unit = check_stack(radiance.value, "light.data"), radiance.unit
     kernel = _resolve_kernel(psf, seeing, light.pixel_scale.to_value(u.arcsec), inst)
     banded = _banded(values, light, inst, kernel, band_limited, psf, workers)
     if banded is not None:
@@ -598,8 +453,8 @@ def image_scene(light, truth=None, instrument=None, *, psf=True, seeing=True, wo
     elif exact_grid and isinstance(imager, BandLimitedImager):
         truth_psf = u.Quantity(imager(truth_values.plane()), truth_values.unit)
     else:
-        data, unit = _split_unit(truth.data, "truth.data")
-        truth_psf = _with_unit(imager(_check_stack(data, "truth.data")), unit)
+        data, unit = split_unit(truth.data, "truth.data")
+        truth_psf = with_unit(imager(check_stack(data, "truth.data")), unit)
     if truth_values is not None:
         truth_values.release()
     return counts, truth_map, truth_psf
@@ -622,12 +477,12 @@ def _image_bands(values, truth, banded, inst):
     unit = getattr(data, "unit", None)
     if isinstance(data, DeferredStack):
         plane = data.plane()
-        truth_map = _with_unit(pixel_means(plane, inst.supersampling), unit)
+        truth_map = with_unit(pixel_means(plane, inst.supersampling), unit)
     else:
-        plane = _check_stack(_split_unit(data, "truth.data")[0], "truth.data")
+        plane = check_stack(split_unit(data, "truth.data")[0], "truth.data")
         truth_map = pixelize(data, truth.pixel_scale, instrument=inst, periodic=False)
     truth_psf = banded(lambda start, stop: np.asarray(plane[start:stop], dtype=banded.dtype)[None], 1,
                        common=False)[0]
     if isinstance(data, DeferredStack):
         data.release()
-    return counts, truth_map, _with_unit(truth_psf, unit)
+    return counts, truth_map, with_unit(truth_psf, unit)
