@@ -81,7 +81,7 @@ class DeferredStack:
 
     def band(self, start, stop):
         """
-        Rows ``start .. stop - 1`` of every plane, made at once.
+        Rows ``start`` to ``stop - 1`` of every plane, made at once.
 
         Parameters
         ----------
