@@ -11,7 +11,7 @@ import sunpy.map
 from astropy.coordinates import SkyCoord
 from sunpy.coordinates import frames
 
-from gongsynth.analysis.disk import disk_coordinates, local_pixel_scale
+from gongsynth.analysis.disk import disk_coordinates, local_pixel_scale, map_wcs
 from gongsynth.analysis.limb import limb_darkening
 from gongsynth.analysis.noise import disk_centre_level, noise_estimate
 from gongsynth.analysis.observations import BadHeaderWarning, load_observation
@@ -99,6 +99,16 @@ def test_disk_coordinates_and_pixel_scale():
     assert np.nanmax(mu) == pytest.approx(1, abs=1e-5)
     assert np.all(np.isnan(mu[rho > 1]))
     assert local_pixel_scale(m).to_value(u.arcsec) == pytest.approx(2.5, rel=1e-6)
+
+
+def test_the_remembered_wcs_follows_a_changed_header():
+    m = sunpy.map.Map(np.zeros((64, 64)), full_disk_header())
+    assert map_wcs(m) is map_wcs(m)   # built once per header
+    before = local_pixel_scale(m)
+    m.meta["cdelt1"] = m.meta["cdelt2"] = 2 * m.meta["cdelt1"]
+    # the WCS is built again for the new header: twice the scale, not the stale one
+    assert local_pixel_scale(m).to_value(u.arcsec) == pytest.approx(2 * before.to_value(u.arcsec), rel=1e-3)
+    assert map_wcs(m).wcs.cdelt[0] == m.wcs.wcs.cdelt[0]
 
 
 # ----------------------------------------------------------------------------- uniform quiet Sun

@@ -13,11 +13,13 @@ import astropy.units as u
 import numpy as np
 import sunpy.map
 from astropy.coordinates import SkyCoord
+from astropy.wcs.utils import wcs_to_celestial_frame
 from sunpy.coordinates import frames
 
 __all__ = [
     "check_map",
     "map_values",
+    "map_wcs",
     "helioprojective_frame",
     "is_helioprojective",
     "pixel_to_helioprojective",
@@ -90,6 +92,40 @@ def map_values(smap):
     return data
 
 
+def _geometry(smap, name, compute):
+    """
+    ``compute()``, remembered on the map for as long as its header and shape are unchanged.
+
+    sunpy rebuilds a map's WCS on every access, and for a GONG map that means
+    placing the site's observer again (an ITRS transformation, ~0.1 s): the
+    statistics of two maps asked for it some 350 times.
+    """
+    key = (smap.data.shape, tuple(sorted((str(k), repr(v)) for k, v in smap.meta.items())))
+    cached = smap.__dict__.get("_gongsynth_geometry")
+    if cached is None or cached[0] != key:
+        cached = (key, {})
+        smap.__dict__["_gongsynth_geometry"] = cached
+    if name not in cached[1]:
+        cached[1][name] = compute()
+    return cached[1][name]
+
+
+def map_wcs(smap):
+    """
+    The map's WCS, built once per header (sunpy builds it again at every ``smap.wcs``).
+
+    Parameters
+    ----------
+    smap : `~sunpy.map.GenericMap`
+
+    Returns
+    -------
+    `~astropy.wcs.WCS`
+        Shared between calls: do not modify it.
+    """
+    return _geometry(smap, "wcs", lambda: smap.wcs)
+
+
 def helioprojective_frame(smap):
     """
     The helioprojective frame of the map's observer at its reference date.
@@ -102,8 +138,8 @@ def helioprojective_frame(smap):
     -------
     `~sunpy.coordinates.frames.Helioprojective`
     """
-    return frames.Helioprojective(observer=smap.observer_coordinate, obstime=smap.reference_date,
-                                  rsun=smap.rsun_meters)
+    return _geometry(smap, "frame", lambda: frames.Helioprojective(
+        observer=smap.observer_coordinate, obstime=smap.reference_date, rsun=smap.rsun_meters))
 
 
 def is_helioprojective(smap):
@@ -118,7 +154,8 @@ def is_helioprojective(smap):
     -------
     bool
     """
-    return isinstance(smap.coordinate_frame, frames.Helioprojective)
+    return _geometry(smap, "helioprojective",
+                     lambda: isinstance(wcs_to_celestial_frame(map_wcs(smap)), frames.Helioprojective))
 
 
 def pixel_to_helioprojective(smap, x, y):
@@ -136,14 +173,15 @@ def pixel_to_helioprojective(smap, x, y):
     tx, ty : `numpy.ndarray`
         Arcsec, as seen by the map's observer; Tx wrapped into [-180°, 180°).
     """
+    wcs = map_wcs(smap)
     if is_helioprojective(smap):
         # Plain WCS arithmetic: no coordinate-frame machinery needed for the map's own frame.
-        tx, ty = smap.wcs.pixel_to_world_values(x, y)
-        units = [u.Unit(un) for un in smap.wcs.world_axis_units]
+        tx, ty = wcs.pixel_to_world_values(x, y)
+        units = [u.Unit(un) for un in wcs.world_axis_units]
         tx = (np.asarray(tx) * units[0]).to_value(u.arcsec)
         ty = (np.asarray(ty) * units[1]).to_value(u.arcsec)
         return (tx + 648000) % 1296000 - 648000, ty  # longitudes to [-180, 180) deg
-    c = smap.wcs.pixel_to_world(x, y).transform_to(helioprojective_frame(smap))
+    c = wcs.pixel_to_world(x, y).transform_to(helioprojective_frame(smap))
     return c.Tx.to_value(u.arcsec), c.Ty.to_value(u.arcsec)
 
 
@@ -162,14 +200,15 @@ def helioprojective_to_pixel(smap, tx, ty):
     x, y : `numpy.ndarray`
         1-D float arrays (NaN where the point is not on the map's projection).
     """
+    wcs = map_wcs(smap)
     if is_helioprojective(smap):
-        units = [u.Unit(un) for un in smap.wcs.world_axis_units]
-        x, y = smap.wcs.world_to_pixel_values((np.atleast_1d(tx) * u.arcsec).to_value(units[0]),
+        units = [u.Unit(un) for un in wcs.world_axis_units]
+        x, y = wcs.world_to_pixel_values((np.atleast_1d(tx) * u.arcsec).to_value(units[0]),
                                               (np.atleast_1d(ty) * u.arcsec).to_value(units[1]))
         return np.asarray(x, dtype=float), np.asarray(y, dtype=float)
     c = SkyCoord(np.atleast_1d(tx) * u.arcsec, np.atleast_1d(ty) * u.arcsec,
                  frame=helioprojective_frame(smap))
-    x, y = smap.wcs.world_to_pixel(c)
+    x, y = wcs.world_to_pixel(c)
     return np.asarray(x, dtype=float), np.asarray(y, dtype=float)
 
 
