@@ -8,6 +8,7 @@ grid, the granular pattern and its anelastic flow), `flux_elements` (kG
 elements, potential spreading, internetwork field), `sunspot` (umbra,
 penumbra, Evershed and moat flows) and `builder` (`model_atmosphere`).
 """
-from gongsynth.sun.model_atmosphere.builder import model_atmosphere
+from gongsynth.sun.model_atmosphere.assembly import ModelSun
+from gongsynth.sun.model_atmosphere.builder import model_atmosphere, model_sun
 
-__all__ = ["model_atmosphere"]
+__all__ = ["model_atmosphere", "model_sun", "ModelSun"]
