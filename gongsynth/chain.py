@@ -50,8 +50,8 @@ from gongsynth.stages.scene.library import LIBRARY_SEED, cached_library
 from gongsynth.stages.scene.tiled import tiled_scenes
 from gongsynth.stages.seeing import SeeingPlanes, frame_motion
 from gongsynth.sun.atmosphere import Atmosphere
-from gongsynth.sun.deferred_transfer import DeferredTransfer
 from gongsynth.sun.model_atmosphere import model_sun
+from gongsynth.sun.model_atmosphere.transfer import DeferredTransfer
 from gongsynth.sun.photosphere import DeferredStokes
 from gongsynth.sun.rt.synthesis import synthesize as rt_synthesize
 from gongsynth.sun.sampling import check_spectral_sampling

@@ -26,7 +26,7 @@ import numpy as np
 
 from gongsynth import instruments
 from gongsynth.instruments.quadrature import channel_weights
-from gongsynth.sun.deferred_transfer import DeferredTransfer
+from gongsynth.sun.model_atmosphere.transfer import DeferredTransfer
 from gongsynth.sun.photosphere import DeferredStokes
 from gongsynth.validation import check_finite
 
@@ -172,7 +172,7 @@ def channel_images(stokes, *, mueller=None, instrument=None):
     stokes : `~gongsynth.sun.stokes.StokesCube` or a deferred cube
         Spectral radiance at the Sun (ny, nx, nλ).  A deferred cube
         (`~gongsynth.sun.photosphere.DeferredStokes`,
-        `~gongsynth.sun.deferred_transfer.DeferredTransfer`) is
+        `~gongsynth.sun.model_atmosphere.transfer.DeferredTransfer`) is
         synthesised and collapsed `_BLOCK_SPECTRA` columns at a time, with the
         same result as its whole cube (a `DeferredTransfer`'s blocks go
         through the cube's own path: the same bits where the row length

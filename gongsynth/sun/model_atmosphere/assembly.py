@@ -78,7 +78,7 @@ class ModelSun:
         self._canopy = None
         self._whole = None
 
-    def rows(self, rows):
+    def rows(self, rows, *, thermodynamics_only=False):
         """
         The atmosphere of some rows, bit for bit the same as those rows of `atmosphere`.
 
@@ -87,6 +87,9 @@ class ModelSun:
         rows : array_like of int
             Row indices, taken modulo ny (the box is periodic: a block with a
             halo may wrap around), in any order, repeats allowed.
+        thermodynamics_only : bool
+            Temperature and pressure only (no flow, no field: what the
+            reference height of the rays needs).
 
         Returns
         -------
@@ -102,6 +105,9 @@ class ModelSun:
         temp = np.empty((nz, nr, nx), dtype=np.float32)
         pres = np.empty_like(temp)
         run_chunks(_blend, nr, *(pick(p_) for p_ in plan["blend"]), *plan["blend_tables"], temp, pres)
+        if thermodynamics_only:
+            return Atmosphere(temp << u.K, self.z, self.pixel_size, gas_pressure=pres << u.Unit("dyn cm-2"),
+                              microturbulence=plan["microturbulence"] * u.km / u.s, meta=self.meta)
         vel = np.empty((3,) + temp.shape, dtype=np.float32)
         h, s, flows = plan["flow_profiles"]
         vz0, gx, gy, svx, svy = (pick(p_) for p_ in plan["flow"])

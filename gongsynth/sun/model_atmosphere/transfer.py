@@ -129,7 +129,7 @@ class DeferredTransfer:
 
     @property
     def meta(self):
-        """Provenance, as the cube's (``truth_anchor_mean_km``: the mean over the blocks' means)."""
+        """Provenance, as the cube's, but ``truth_anchor_mean_km`` None (a block's includes its halo)."""
         if self._meta is None:
             for _ in self.blocks():
                 pass
@@ -141,7 +141,7 @@ class DeferredTransfer:
         if self._mu >= 1:
             return float("nan")
         step = max(1, int(np.ceil(np.sqrt(ny * nx / _REFERENCE_COLUMNS))))
-        sample = self._sun.rows(np.arange(0, ny, step))[:, ::step]
+        sample = self._sun.rows(np.arange(0, ny, step), thermodynamics_only=True)[:, ::step]
         columns = sample.shape[1] * sample.shape[2]
         return rt_synthesis.reference_height(sample, self._line, max_columns=columns)
 
@@ -175,7 +175,6 @@ class DeferredTransfer:
         z_ref = self._reference_height()
         below, above = self._halo(z_ref)
         blos = np.empty((ny, nx), dtype=np.float32)
-        anchors = []
         starts = range(0, ny, step)
         if self._progress:
             from tqdm.auto import tqdm
@@ -194,13 +193,11 @@ class DeferredTransfer:
             del box
             part = cube[keep]
             blos[rows] = part.blos.to_value(u.G)
-            anchors.append((n, cube.meta["truth_anchor_mean_km"]))
             meta = cube.meta
             yield rows, part
         self._sun.release()  # the canopy's layers: made again only if asked for
         self._blos = u.Quantity(blos, u.G, copy=False)
-        weights, means = np.array(anchors).T
-        self._meta = dict(meta, truth_anchor_mean_km=float(np.sum(weights * means) / np.sum(weights)))
+        self._meta = dict(meta, truth_anchor_mean_km=None)
 
     def cube(self):
         """
