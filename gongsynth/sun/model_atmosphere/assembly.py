@@ -8,8 +8,7 @@ import numpy as np
 
 from gongsynth.sun.atmosphere import Atmosphere
 from gongsynth.sun.model_atmosphere import flux_elements as fe
-from gongsynth.sun.model_atmosphere.builder import _add_internetwork, _blend, _flow
-from gongsynth.threads import run_chunks
+from gongsynth.sun.model_atmosphere.builder import assemble_rows
 
 __all__ = ["ModelSun"]
 
@@ -99,31 +98,21 @@ class ModelSun:
         plan = self._plan
         nz, ny, nx = self.shape
         rows = np.mod(np.asarray(rows, dtype=np.int64).reshape(-1), ny)
-        nr = rows.size
-        whole = nr == ny and bool(np.array_equal(rows, np.arange(ny)))
-        pick = (lambda plane: plane) if whole else (lambda plane: np.ascontiguousarray(plane[rows]))
-        temp = np.empty((nz, nr, nx), dtype=np.float32)
-        pres = np.empty_like(temp)
-        run_chunks(_blend, nr, *(pick(p_) for p_ in plan["blend"]), *plan["blend_tables"], temp, pres)
+        whole = rows.size == ny and bool(np.array_equal(rows, np.arange(ny)))
+        canopy = None if thermodynamics_only else self._canopy_layers()
         if thermodynamics_only:
-            return Atmosphere(temp << u.K, self.z, self.pixel_size, gas_pressure=pres << u.Unit("dyn cm-2"),
-                              microturbulence=plan["microturbulence"] * u.km / u.s, meta=self.meta)
-        vel = np.empty((3,) + temp.shape, dtype=np.float32)
-        h, s, flows = plan["flow_profiles"]
-        vz0, gx, gy, svx, svy = (pick(p_) for p_ in plan["flow"])
-        run_chunks(_flow, nr, h, s, flows, vz0, gx, gy, svx, svy, vel)
-        canopy = self._canopy_layers()
-        if canopy is None:
-            mag = np.zeros_like(vel)
+            mag = None
+        elif canopy is None:
+            mag = np.zeros((3, nz, rows.size, nx), dtype=np.float32)
         elif whole:
             mag, self._canopy = canopy, None          # handed over, not copied
         else:
             mag = canopy[:, :, rows]
-        if plan["base_field"] is not None:
-            mag[2] += pick(plan["base_field"]).astype(np.float32)
-        run_chunks(_add_internetwork, nr, *plan["internetwork_profiles"],
-                   *(pick(p_) for p_ in plan["internetwork"]), mag)
+        temp, pres, vel = assemble_rows(plan, rows, mag)
         kms = u.km / u.s
+        if thermodynamics_only:
+            return Atmosphere(temp << u.K, self.z, self.pixel_size, gas_pressure=pres << u.Unit("dyn cm-2"),
+                              microturbulence=plan["microturbulence"] * kms, meta=self.meta)
         return Atmosphere(temp << u.K, self.z, self.pixel_size, gas_pressure=pres << u.Unit("dyn cm-2"),
                           velocity=vel << kms, magnetic_field=mag << u.G,
                           microturbulence=plan["microturbulence"] * kms, meta=self.meta)

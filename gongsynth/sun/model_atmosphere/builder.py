@@ -45,10 +45,11 @@ from gongsynth.sun.model_atmosphere import stratification as st
 from gongsynth.sun.model_atmosphere.granulation import PeriodicGrid, anelastic_profile, granulation_pattern
 from gongsynth.sun.model_atmosphere.sunspot import spot_structure
 from gongsynth.sun.rt.eos import solve_state
+from gongsynth.threads import run_chunks
 from gongsynth.validation import check_quantity, check_scalar
 
-__all__ = ["model_atmosphere", "model_sun", "reference_stratifications", "GRANULATION_MODELS",
-           "ELEMENT_MODELS", "UMBRA_MODELS"]
+__all__ = ["model_atmosphere", "model_sun", "assemble_rows", "reference_stratifications",
+           "GRANULATION_MODELS", "ELEMENT_MODELS", "UMBRA_MODELS"]
 
 GRANULATION_MODELS = {"brc": ("granule_brc", "intergranule_brc"), "bbr": ("granule_bbr", "intergranule_bbr")}
 ELEMENT_MODELS = {"network": "network", "plage": "plage", "quiet": "hsra"}
@@ -186,6 +187,44 @@ def _add_internetwork(start, stop, c, dc, ax, ay, dazdx, dazdy, curl, mag):
                 mag[2, k, j, i] += c[k] * curl[j, i]
 
 
+
+
+def assemble_rows(plan, rows, magnetic_field=None):
+    """
+    The 3-D fields of some rows from `model_sun`'s plan (the same bits as those rows of the whole box).
+
+    Parameters
+    ----------
+    plan : dict
+        The whole-plane ingredients (``_plan``).
+    rows : `numpy.ndarray` of int64
+        Row indices in [0, ny).
+    magnetic_field : `numpy.ndarray`, optional
+        (3, nz, len(rows), nx) float32 holding the canopy's potential field of
+        these rows (or zeros), completed in place with the internetwork; None:
+        thermodynamics only.
+
+    Returns
+    -------
+    temperature, pressure, velocity : `numpy.ndarray`
+        float32, (nz, len(rows), nx) and (3, nz, len(rows), nx) (None with thermodynamics only).
+    """
+    nz, nr, nx = plan["z"].size, rows.size, plan["grid"].nx
+    whole = nr == plan["grid"].ny and bool(np.array_equal(rows, np.arange(nr)))
+    pick = (lambda plane: plane) if whole else (lambda plane: np.ascontiguousarray(plane[rows]))
+    temp = np.empty((nz, nr, nx), dtype=np.float32)
+    pres = np.empty_like(temp)
+    run_chunks(_blend, nr, *(pick(p_) for p_ in plan["blend"]), *plan["blend_tables"], temp, pres)
+    if magnetic_field is None:
+        return temp, pres, None
+    vel = np.empty((3,) + temp.shape, dtype=np.float32)
+    h, s, flows = plan["flow_profiles"]
+    run_chunks(_flow, nr, h, s, flows, *(pick(p_) for p_ in plan["flow"]), vel)
+    if plan["base_field"] is not None:
+        magnetic_field[2] += pick(plan["base_field"]).astype(np.float32)
+    run_chunks(_add_internetwork, nr, *plan["internetwork_profiles"],
+               *(pick(p_) for p_ in plan["internetwork"]), magnetic_field)
+    return temp, pres, vel
 
 
 def _choice(value, options, name):
