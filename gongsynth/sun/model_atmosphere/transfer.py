@@ -26,7 +26,7 @@ from gongsynth.sun.model_atmosphere.assembly import ModelSun
 from gongsynth.sun.rt import synthesis as rt_synthesis
 from gongsynth.sun.rt.atomic_data import get_line
 from gongsynth.sun.rt.rays import ray_offsets
-from gongsynth.sun.stokes import StokesCube
+from gongsynth.sun.stokes import DeferredCube, StokesCube
 
 __all__ = ["DeferredTransfer"]
 
@@ -46,7 +46,7 @@ def _anchored(z_ref):
         rt_synthesis.reference_height = found
 
 
-class DeferredTransfer:
+class DeferredTransfer(DeferredCube):
     """
     The spectra `gongsynth.rt.synthesize` makes of a model Sun, synthesised a block of rows at a time.
 
@@ -82,6 +82,8 @@ class DeferredTransfer:
     >>> bool(np.array_equal(deferred.blos, whole.blos))
     True
     """
+
+    _method = "LTE radiative transfer by blocks"
 
     def __init__(self, sun, *, mu, azimuth, line=None, progress=False):
         if not isinstance(sun, ModelSun):
@@ -214,16 +216,3 @@ class DeferredTransfer:
             self._cube = StokesCube(*(u.Quantity(a, unit, copy=False) for a in stack), self._wavelength,
                                     self.pixel_size, mu=self._mu, blos=self._blos, meta=self._meta)
         return self._cube
-
-    def __getattr__(self, name):
-        if name.startswith("_"):
-            raise AttributeError(name)
-        return getattr(self.cube(), name)
-
-    def __getitem__(self, key):
-        return self.cube()[key]
-
-    def __repr__(self):
-        ny, nx, nl = self.shape
-        held = "held" if self._cube is not None else "not synthesised"
-        return f"<DeferredTransfer {ny}×{nx}×{nl}, LTE radiative transfer by blocks, {held}>"
