@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import threading
 
 import astropy.units as u
 import numpy as np
@@ -34,16 +35,25 @@ __all__ = ["DeferredTransfer"]
 _REFERENCE_COLUMNS = 4096
 
 
+_ANCHOR_LOCK = threading.Lock()
+
+
 @contextlib.contextmanager
-def _anchored(z_ref):
-    """`rt.synthesize` of a block takes the whole box's reference height, not its own."""
-    # rt.synthesize has no argument for it (a keyword there would replace this, see the changelog).
-    found = rt_synthesis.reference_height
-    rt_synthesis.reference_height = lambda atmosphere, line=None, max_columns=_REFERENCE_COLUMNS: z_ref
-    try:
-        yield
-    finally:
-        rt_synthesis.reference_height = found
+def _anchored(box, z_ref):
+    """`rt.synthesize` of the block ``box`` takes the whole box's reference height, not its own."""
+    # rt.synthesize has no argument for it (a keyword there would replace this, see the changelog);
+    # any other atmosphere, from another thread too, still gets its own.
+    with _ANCHOR_LOCK:
+        found = rt_synthesis.reference_height
+
+        def anchored(atmosphere, line=None, max_columns=_REFERENCE_COLUMNS):
+            return z_ref if atmosphere is box else found(atmosphere, line, max_columns)
+
+        rt_synthesis.reference_height = anchored
+        try:
+            yield
+        finally:
+            rt_synthesis.reference_height = found
 
 
 class DeferredTransfer(DeferredCube):
@@ -156,7 +166,7 @@ class DeferredTransfer(DeferredCube):
         lo, hi = math.floor(float(dy.min())), math.floor(float(dy.max()))
         return max(0, -lo), max(0, hi + 1)
 
-    def blocks(self, columns=65536):
+    def blocks(self, columns=65536, halo_share=0.25):
         """
         Yield the cube a block of whole rows at a time.
 
@@ -164,6 +174,10 @@ class DeferredTransfer(DeferredCube):
         ----------
         columns : int
             Columns per block (rounded to whole rows, at least one).
+        halo_share : float or None
+            Blocks are made a whole multiple of that larger where the halo
+            rows the inclined rays cross (synthesised and dropped) would
+            exceed this share of a block; None: never.
 
         Yields
         ------
@@ -176,6 +190,8 @@ class DeferredTransfer(DeferredCube):
         step = max(1, int(columns) // nx)
         z_ref = self._reference_height()
         below, above = self._halo(z_ref)
+        if halo_share is not None and below + above > halo_share * step:
+            step *= math.ceil((below + above) / (halo_share * step))
         blos = np.empty((ny, nx), dtype=np.float32)
         starts = range(0, ny, step)
         if self._progress:
@@ -189,7 +205,7 @@ class DeferredTransfer(DeferredCube):
             else:
                 box = self._sun.rows(np.arange(start - below, rows.stop + above))
                 keep = slice(below, below + n)
-            with _anchored(z_ref):
+            with _anchored(box, z_ref):
                 cube = rt_synthesis.synthesize(box, mu=self._mu, azimuth=self._azimuth, line=self._line,
                                                progress=False)
             del box
