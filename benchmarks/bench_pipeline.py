@@ -88,7 +88,7 @@ def main():
     if args.pixel_size:
         grid["photosphere_pixel_size"] = args.pixel_size * u.km
     floor_mb = _rss_mb()       # the baseline: this process after its imports, before any stage
-    peaks = _stage_peaks()
+    peaks, cpus = _stage_peaks()
     start, cpu = time.perf_counter(), time.process_time()
     result = gongsynth.simulate(seed=1, detector_shape=args.shape, engine=args.engine, sun=args.sun,
                                 duration=args.duration * u.min, mode=args.mode, progress=False, **grid)
@@ -99,7 +99,8 @@ def main():
           f"sun {result.config.sun}, photosphere {result.config.photosphere_shape} x "
           f"{result.config.photosphere_pixel_size}; load {os.getloadavg()[0]:.1f}")
     for stage, seconds in result.timings.items():
-        print(f"  {stage:<16s} {seconds:7.2f} s   peak RSS {peaks.get(stage, 0):6.0f} MB")
+        print(f"  {stage:<16s} {seconds:7.2f} s wall {cpus.get(stage, 0):7.2f} s CPU   "
+              f"peak RSS {peaks.get(stage, 0):6.0f} MB")
     print(f"  {'total':<16s} {total:7.2f} s wall, {cpu:.2f} s CPU (set-up outside the stages: "
           f"{total - sum(result.timings.values()):.2f} s)")
     print(f"  peak memory      {peak_mb:7.0f} MB = {peak_mb / floor_mb:.2f} x the process after its imports "
@@ -113,16 +114,20 @@ def _rss_mb():
 
 
 def _stage_peaks():
-    """{stage name: peak RSS in MB while it ran}, filled by a thread sampling every 0.2 s."""
+    """{stage name: peak RSS in MB while it ran} (a thread samples every 0.2 s), {stage name: CPU s}."""
     import threading
 
     import gongsynth.chain
-    peaks, now = {}, ["set-up"]
+    peaks, cpus, now = {}, {}, ["set-up"]
     run_stage = gongsynth.chain.Stage.__call__
 
     def named(self, state):
         now[0] = self.name
-        return run_stage(self, state)
+        cpu = time.process_time()
+        try:
+            return run_stage(self, state)
+        finally:
+            cpus[self.name] = time.process_time() - cpu
 
     def watch():
         while True:
@@ -131,7 +136,7 @@ def _stage_peaks():
 
     gongsynth.chain.Stage.__call__ = named
     threading.Thread(target=watch, daemon=True).start()
-    return peaks
+    return peaks, cpus
 
 
 if __name__ == "__main__":

@@ -50,6 +50,8 @@ from gongsynth.stages.scene.library import LIBRARY_SEED, cached_library
 from gongsynth.stages.scene.tiled import tiled_scenes
 from gongsynth.stages.seeing import SeeingPlanes, frame_motion
 from gongsynth.sun.atmosphere import Atmosphere
+from gongsynth.sun.model_atmosphere import model_sun
+from gongsynth.sun.model_atmosphere.transfer import DeferredTransfer
 from gongsynth.sun.photosphere import DeferredStokes
 from gongsynth.sun.rt.synthesis import synthesize as rt_synthesize
 from gongsynth.sun.sampling import check_spectral_sampling
@@ -244,9 +246,12 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
         stages.append(Stage("photosphere", (), ("photosphere",), library,
                             f"the built-in Sun's patch library: quiet to sunspot, {how}, at a set of angles"))
     elif stokes is None:
+        # The 3-D Sun as its whole-plane parts, assembled a block of rows at a time by the synthesis.
+        build = model_sun if config.sun == "model-atmosphere" else SUNS[config.sun]
+
         def photosphere():
-            return {"photosphere": SUNS[config.sun](seed=child_sequence(config.seed, "photosphere"),
-                                                    **config.sun_arguments())}
+            return {"photosphere": build(seed=child_sequence(config.seed, "photosphere"),
+                                         **config.sun_arguments())}
 
         what = "3-D model atmosphere" if config.sun == "model-atmosphere" else "model photosphere"
         stages.append(Stage("photosphere", (), ("photosphere",), photosphere,
@@ -272,11 +277,13 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
     else:
         if stokes is None and config.sun == "model-atmosphere":
             def atmosphere_transfer(photosphere):
-                return {"stokes": rt_synthesize(photosphere, mu=pointing.mu, azimuth=pointing.los_azimuth,
-                                                progress=progress, **line_of(inst))}
+                # Deferred: the channels stage assembles and synthesises it block by block, never whole.
+                return {"stokes": DeferredTransfer(photosphere, mu=pointing.mu, azimuth=pointing.los_azimuth,
+                                                   progress=progress, **line_of(inst))}
 
             stages.append(Stage("synthesis", ("photosphere",), ("stokes",), atmosphere_transfer,
-                                "LTE Stokes radiative transfer of the model atmosphere at the pointing's mu"))
+                                "LTE Stokes radiative transfer of the model atmosphere at the pointing's mu "
+                                "(deferred)"))
         elif stokes is None:
             def synthesis(photosphere):
                 # Deferred: the channels stage synthesises it block by block, never whole.

@@ -26,6 +26,7 @@ import numpy as np
 
 from gongsynth import instruments
 from gongsynth.instruments.quadrature import channel_weights
+from gongsynth.sun.model_atmosphere.transfer import DeferredTransfer
 from gongsynth.sun.photosphere import DeferredStokes
 from gongsynth.validation import check_finite
 
@@ -168,10 +169,14 @@ def channel_images(stokes, *, mueller=None, instrument=None):
 
     Parameters
     ----------
-    stokes : `~gongsynth.sun.stokes.StokesCube` or `~gongsynth.sun.photosphere.DeferredStokes`
-        Spectral radiance at the Sun (ny, nx, nλ).  A deferred cube is
+    stokes : `~gongsynth.sun.stokes.StokesCube` or a deferred cube
+        Spectral radiance at the Sun (ny, nx, nλ).  A deferred cube
+        (`~gongsynth.sun.photosphere.DeferredStokes`,
+        `~gongsynth.sun.model_atmosphere.transfer.DeferredTransfer`) is
         synthesised and collapsed `_BLOCK_SPECTRA` columns at a time, with the
-        same result as its whole cube.
+        same result as its whole cube (a `DeferredTransfer`'s blocks go
+        through the cube's own path: the same bits where the row length
+        divides `_BLOCK_SPECTRA`).
     mueller : array_like, optional
         Dimensionless instrument Mueller matrix applied before the I±V
         analysis: (4, 4), per wavelength (nλ, 4, 4) or per pixel (ny, nx, 4, 4).
@@ -199,6 +204,17 @@ def channel_images(stokes, *, mueller=None, instrument=None):
     ((6, 2, 3), Unit("erg / (s sr cm2)"))
     """
     inst = instruments.get(instrument)
+    if isinstance(stokes, DeferredTransfer):
+        # Radiative transfer a block of rows at a time, each block collapsed as its cube.
+        m = None if mueller is None else _check_mueller(mueller)
+        per_pixel = m is not None and m.ndim == 4
+        out = None
+        for rows, cube in stokes.blocks(_BLOCK_SPECTRA):
+            part = channel_images(cube, mueller=m[rows] if per_pixel else m, instrument=inst).value
+            if out is None:
+                out = np.empty((part.shape[0],) + stokes.shape[:2])
+            out[:, rows] = part
+        return u.Quantity(out, CHANNEL_UNIT, copy=False)
     if isinstance(stokes, DeferredStokes):
         # Synthesised and collapsed a block of rows at a time: the cube is never held whole.
         return _deferred_channel_images(stokes, mueller, inst)

@@ -27,7 +27,7 @@ from gongsynth.sun.sampling import MAX_FIELD, MAX_VELOCITY, check_spectral_sampl
 from gongsynth.sun.stokes_files import RADIANCE_UNIT, STOKES, read_fits, read_rh15d, write_fits
 from gongsynth.validation import check_quantity
 
-__all__ = ["StokesCube", "RADIANCE_UNIT", "STOKES"]
+__all__ = ["StokesCube", "DeferredCube", "RADIANCE_UNIT", "STOKES"]
 
 # Rows converted / checked at once: bounds temporaries to ~a few tens of MB.
 _BLOCK_ELEMENTS = 4_000_000
@@ -495,3 +495,35 @@ class StokesCube:
         """
         return cls(**read_rh15d(path, pixel_size=pixel_size, mu=mu,
                                 wavelength_range=wavelength_range, region=region))
+
+
+class DeferredCube:
+    """
+    Base of the cubes synthesised only where and when needed (block by block).
+
+    A subclass knows ``shape`` and its own cheap attributes, sets ``_cube``
+    (None until the whole cube is made) and ``_method`` (words for the
+    repr), and defines ``cube()``; any other attribute (``I``, ``V``, ...)
+    and slicing are the whole cube's, synthesised once by ``cube()``.
+    """
+
+    _cube = None
+    _method = ""
+
+    def cube(self):
+        """The whole `StokesCube` (a subclass makes it on the first call and keeps it)."""
+        raise NotImplementedError
+
+    def __getattr__(self, name):
+        if name.startswith("_"):
+            raise AttributeError(name)
+        return getattr(self.cube(), name)
+
+    def __getitem__(self, key):
+        return self.cube()[key]
+
+    def __repr__(self):
+        ny, nx, nl = self.shape
+        held = "held" if self._cube is not None else "not synthesised"
+        return f"<{type(self).__name__} {ny}×{nx}×{nl}, {self._method}, {held}>"
+

@@ -6,8 +6,13 @@ T(log τ) models, with sources), `stratification` (their hydrostatic
 equilibrium and placement on a geometric grid), `granulation` (the periodic
 grid, the granular pattern and its anelastic flow), `flux_elements` (kG
 elements, potential spreading, internetwork field), `sunspot` (umbra,
-penumbra, Evershed and moat flows) and `builder` (`model_atmosphere`).
+penumbra, Evershed and moat flows), `builder` (`model_atmosphere`, and
+`model_sun`: its whole-plane parts), `assembly` (`ModelSun`: the 3-D
+atmosphere of any rows) and `transfer` (`DeferredTransfer`: its spectra by
+`gongsynth.rt.synthesize` a block of rows at a time).
 """
-from gongsynth.sun.model_atmosphere.builder import model_atmosphere
+from gongsynth.sun.model_atmosphere.assembly import ModelSun
+from gongsynth.sun.model_atmosphere.builder import model_atmosphere, model_sun
+from gongsynth.sun.model_atmosphere.transfer import DeferredTransfer
 
-__all__ = ["model_atmosphere"]
+__all__ = ["model_atmosphere", "model_sun", "ModelSun", "DeferredTransfer"]

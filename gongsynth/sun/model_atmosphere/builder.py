@@ -32,6 +32,7 @@ and moat flows of `~gongsynth.sun.model_atmosphere.sunspot` take over.
 from __future__ import annotations
 
 import functools
+import inspect
 import math
 
 import astropy.units as u
@@ -39,7 +40,6 @@ import numba as nb
 import numpy as np
 
 from gongsynth.seeding import as_seed_sequence, stage_generator
-from gongsynth.sun.atmosphere import Atmosphere
 from gongsynth.sun.model_atmosphere import flux_elements as fe
 from gongsynth.sun.model_atmosphere import stratification as st
 from gongsynth.sun.model_atmosphere.granulation import PeriodicGrid, anelastic_profile, granulation_pattern
@@ -48,8 +48,8 @@ from gongsynth.sun.rt.eos import solve_state
 from gongsynth.threads import run_chunks
 from gongsynth.validation import check_quantity, check_scalar
 
-__all__ = ["model_atmosphere", "reference_stratifications", "GRANULATION_MODELS", "ELEMENT_MODELS",
-           "UMBRA_MODELS"]
+__all__ = ["model_atmosphere", "model_sun", "assemble_rows", "reference_stratifications",
+           "GRANULATION_MODELS", "ELEMENT_MODELS", "UMBRA_MODELS"]
 
 GRANULATION_MODELS = {"brc": ("granule_brc", "intergranule_brc"), "bbr": ("granule_bbr", "intergranule_bbr")}
 ELEMENT_MODELS = {"network": "network", "plage": "plage", "quiet": "hsra"}
@@ -189,6 +189,44 @@ def _add_internetwork(start, stop, c, dc, ax, ay, dazdx, dazdy, curl, mag):
 
 
 
+def assemble_rows(plan, rows, magnetic_field=None):
+    """
+    The 3-D fields of some rows from `model_sun`'s plan (the same bits as those rows of the whole box).
+
+    Parameters
+    ----------
+    plan : dict
+        The whole-plane ingredients (``_plan``).
+    rows : `numpy.ndarray` of int64
+        Row indices in [0, ny).
+    magnetic_field : `numpy.ndarray`, optional
+        (3, nz, len(rows), nx) float32 holding the canopy's potential field of
+        these rows (or zeros), completed in place with the internetwork; None:
+        thermodynamics only.
+
+    Returns
+    -------
+    temperature, pressure, velocity : `numpy.ndarray`
+        float32, (nz, len(rows), nx) and (3, nz, len(rows), nx) (None with thermodynamics only).
+    """
+    nz, nr, nx = plan["z"].size, rows.size, plan["grid"].nx
+    whole = nr == plan["grid"].ny and bool(np.array_equal(rows, np.arange(nr)))
+    pick = (lambda plane: plane) if whole else (lambda plane: np.ascontiguousarray(plane[rows]))
+    temp = np.empty((nz, nr, nx), dtype=np.float32)
+    pres = np.empty_like(temp)
+    run_chunks(_blend, nr, *(pick(p_) for p_ in plan["blend"]), *plan["blend_tables"], temp, pres)
+    if magnetic_field is None:
+        return temp, pres, None
+    vel = np.empty((3,) + temp.shape, dtype=np.float32)
+    h, s, flows = plan["flow_profiles"]
+    run_chunks(_flow, nr, h, s, flows, *(pick(p_) for p_ in plan["flow"]), vel)
+    if plan["base_field"] is not None:
+        magnetic_field[2] += pick(plan["base_field"]).astype(np.float32)
+    run_chunks(_add_internetwork, nr, *plan["internetwork_profiles"],
+               *(pick(p_) for p_ in plan["internetwork"]), magnetic_field)
+    return temp, pres, vel
+
+
 def _choice(value, options, name):
     if value not in options:
         raise ValueError(f"{name} must be one of {sorted(options)}, got {value!r}")
@@ -297,6 +335,23 @@ def model_atmosphere(shape=(1024, 1024), pixel_size=96 * u.km, *, seed, nz=80,
     >>> atm.shape, bool(atm.meta["spot"])
     ((40, 32, 32), False)
     """
+    # Late: the assembly imports this module's kernels.
+    from gongsynth.sun.model_atmosphere.assembly import ModelSun
+
+    return ModelSun(_plan(shape, pixel_size, seed, nz, height_range, spot, granule_size, granulation_models,
+                          granulation_amplitude, granulation_velocity, velocity_decay_height,
+                          element_flux_density, element_field, element_model, element_depression, canopy,
+                          positive_fraction, internetwork_field, internetwork_horizontal_field,
+                          umbra_radius, penumbra_radius, umbra_field, penumbra_field, umbra_model,
+                          evershed_speed, moat_speed, microturbulence)).atmosphere()
+
+
+def _plan(shape, pixel_size, seed, nz, height_range, spot, granule_size, granulation_models,
+          granulation_amplitude, granulation_velocity, velocity_decay_height, element_flux_density,
+          element_field, element_model, element_depression, canopy, positive_fraction, internetwork_field,
+          internetwork_horizontal_field, umbra_radius, penumbra_radius, umbra_field, penumbra_field,
+          umbra_model, evershed_speed, moat_speed, microturbulence):
+    """`model_atmosphere`'s arguments checked and its whole-plane (2-D) ingredients made, as a dict."""
     if (not isinstance(shape, (tuple, list)) or len(shape) != 2
             or not all(isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 8
                        for n in shape)):
@@ -374,16 +429,8 @@ def model_atmosphere(shape=(1024, 1024), pixel_size=96 * u.km, *, seed, nz=80,
     spot_w = sp["umbra"] + sp["penumbra"]
     f_el = np.clip(np.abs(bz_el) / b_el, 0.0, 1.0) * (1 - spot_w)
 
-    # Thermodynamics.
-    temp = np.empty((zg.size, ny, nx), dtype=np.float32)
-    pres = np.empty_like(temp)
+    # The 2-D ingredients of the flows and the field (the 3-D assembly is `ModelSun.rows`).
     a_clip = np.clip(a, _A_TABLE[0], _A_TABLE[-1])
-    run_chunks(_blend, ny, a_clip, f_el, sp["umbra"], sp["penumbra"], float(_A_TABLE[0]),
-               float(_A_TABLE[1] - _A_TABLE[0]), ref["quiet_t"], np.exp(ref["quiet_lnp"]), ref["tube_t"],
-               np.exp(ref["tube_lnp"]), ref["umbra_t"], np.exp(ref["umbra_lnp"]), ref["penumbra_t"],
-               np.exp(ref["penumbra_lnp"]), temp, pres)
-
-    # Velocity: anelastic granular flow outside the magnetic structures, Evershed and moat flows.
     h, s = anelastic_profile(zg, ref["density"], h_v)
     quiet = (1 - f_el) * (1 - sp["mask"])
     vz0 = vpat * quiet
@@ -392,9 +439,7 @@ def model_atmosphere(shape=(1024, 1024), pixel_size=96 * u.km, *, seed, nz=80,
     gx, gy = grid.gradient(grid.inverse_laplacian(vz0))
     gx *= 1 - sp["mask"]          # the (non-local) granular outflow stops at the spot's edge
     gy *= 1 - sp["mask"]
-    vel = np.empty((3,) + temp.shape, dtype=np.float32)
     flows = np.exp(-np.maximum(zg, 0.0) / 150.0)          # Evershed/moat flows: strongest at tau = 1
-    run_chunks(_flow, vz0.shape[0], h, s, flows, vz0, gx, gy, sp["vx"], sp["vy"], vel)
 
     # Magnetic field: potential continuation of the element and spot base planes + internetwork.
     rng = stage_generator(root, "model_atmosphere", _INTERNETWORK)
@@ -403,19 +448,11 @@ def model_atmosphere(shape=(1024, 1024), pixel_size=96 * u.km, *, seed, nz=80,
     ax, ay, az = (p_ * quiet_in for p_ in pots)
     dazdx, dazdy = grid.gradient(az)
     curl = grid.gradient(ay)[0] - grid.gradient(ax)[1]
-    pot = (ax, ay, dazdx, dazdy, curl)
     spectra, bases = ([grid.fft(bz_el).astype(np.complex64)], [ref["z_tube"]]) if canopy else ([], [])
     if has_spot:
         spectra.append(grid.fft(sp["bz"]).astype(np.complex64))
         bases.append(ref["z_umbra"])
-    mag = np.empty_like(vel)
-    mag[...] = 0.0
-    for k in range(zg.size if spectra else 0):
-        mag[0, k], mag[1, k], mag[2, k] = fe.potential_layer(grid, spectra, bases, zg[k])
-    if not canopy:
-        mag[2] += bz_el.astype(np.float32)
     c, dc = fe.internetwork_profile(zg)
-    run_chunks(_add_internetwork, mag.shape[2], c, dc, *pot, mag)
 
     meta = {
         "origin": "gongsynth.model_atmosphere", "seed_entropy": str(root.entropy), "spot": has_spot,
@@ -433,6 +470,42 @@ def model_atmosphere(shape=(1024, 1024), pixel_size=96 * u.km, *, seed, nz=80,
                    "umbra_field_G": b_u, "penumbra_field_G": b_p, "umbra_model": umbra_model,
                    "evershed_speed_km_s": v_e, "moat_speed_km_s": v_m, "microturbulence_km_s": v_t},
     }
-    kms = u.km / u.s
-    return Atmosphere(temp << u.K, zg * u.km, px * u.km, gas_pressure=pres << u.Unit("dyn cm-2"),
-                      velocity=vel << kms, magnetic_field=mag << u.G, microturbulence=v_t * kms, meta=meta)
+    # Per-row planes (indexed by the kernels' row j), then the height profiles and tables.
+    return dict(grid=grid, z=zg, pixel_size=px, microturbulence=v_t, meta=meta, spectra=spectra, bases=bases,
+                base_field=None if canopy else bz_el,
+                blend=(a_clip, f_el, sp["umbra"], sp["penumbra"]),
+                blend_tables=(float(_A_TABLE[0]), float(_A_TABLE[1] - _A_TABLE[0]), ref["quiet_t"],
+                              np.exp(ref["quiet_lnp"]), ref["tube_t"], np.exp(ref["tube_lnp"]),
+                              ref["umbra_t"], np.exp(ref["umbra_lnp"]), ref["penumbra_t"],
+                              np.exp(ref["penumbra_lnp"])),
+                flow=(vz0, gx, gy, sp["vx"], sp["vy"]), flow_profiles=(h, s, flows),
+                internetwork=(ax, ay, dazdx, dazdy, curl), internetwork_profiles=(c, dc))
+
+
+def model_sun(*args, **kwargs):
+    """
+    The model Sun of `model_atmosphere`, assembled a block of rows at a time when asked.
+
+    Parameters
+    ----------
+    *args, **kwargs
+        Those of `model_atmosphere` (checked the same way).
+
+    Returns
+    -------
+    `~gongsynth.sun.model_atmosphere.assembly.ModelSun`
+
+    Examples
+    --------
+    >>> sun = model_sun((32, 32), seed=1, nz=40)
+    >>> whole = model_atmosphere((32, 32), seed=1, nz=40)
+    >>> block = sun.rows(range(30, 36))                      # wraps: rows 30, 31, 0, ..., 3
+    >>> b_block, b_whole = block.raw("magnetic_field"), whole.raw("magnetic_field")
+    >>> block.shape, bool(np.array_equal(b_block[:, :, 2], b_whole[:, :, 0]))
+    ((40, 6, 32), True)
+    """
+    bound = inspect.signature(model_atmosphere).bind(*args, **kwargs)
+    bound.apply_defaults()
+    from gongsynth.sun.model_atmosphere.assembly import ModelSun
+
+    return ModelSun(_plan(**bound.arguments))

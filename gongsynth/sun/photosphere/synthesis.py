@@ -29,7 +29,7 @@ from gongsynth.geometry import check_geometry, los_basis
 from gongsynth.sun.photosphere._kernel import me_kernel, me_project_kernel, voigt_table
 from gongsynth.sun.photosphere.columns import Photosphere
 from gongsynth.sun.photosphere.line import NiLine, me_line
-from gongsynth.sun.stokes import RADIANCE_UNIT, StokesCube
+from gongsynth.sun.stokes import RADIANCE_UNIT, DeferredCube, StokesCube
 from gongsynth.validation import check_wavelength_grid
 
 __all__ = ["synthesize", "DeferredStokes", "default_wavelength", "zeeman_splitting"]
@@ -288,7 +288,7 @@ def _synthesize_rows(inputs, rows):
                       blos=u.Quantity(b_par.astype(np.float32), u.G, copy=False))
 
 
-class DeferredStokes:
+class DeferredStokes(DeferredCube):
     """
     The Milne–Eddington spectra of a photosphere, synthesised when and where they are needed.
 
@@ -321,6 +321,8 @@ class DeferredStokes:
     >>> bool(np.array_equal(deferred.I, synthesize(ph).I))
     True
     """
+
+    _method = "Milne-Eddington"
 
     def __init__(self, photosphere, mu=1.0, wavelength=None, *, los_azimuth=-90 * u.deg, instrument=None,
                  line=None, method="numba"):
@@ -458,16 +460,3 @@ class DeferredStokes:
         if self._cube is None:
             self._cube = _synthesize_rows(self._inputs, slice(None))
         return self._cube
-
-    def __getattr__(self, name):
-        if name.startswith("_"):
-            raise AttributeError(name)
-        return getattr(self.cube(), name)
-
-    def __getitem__(self, key):
-        return self.cube()[key]
-
-    def __repr__(self):
-        ny, nx, nl = self.shape
-        held = "held" if self._cube is not None else "not synthesised"
-        return f"<DeferredStokes {ny}×{nx}×{nl}, Milne-Eddington, {held}>"
