@@ -165,8 +165,9 @@ def start(kernels=None):
             return False
         kernels = str(Path(KERNELS if kernels is None else kernels).resolve())
         try:
+            _cache_folder()                 # numba can cache here at all
             groups = len(load_kernels(kernels))
-        except (OSError, ValueError, KeyError):
+        except Exception:
             return False
         package = str(Path(__file__).resolve().parent)
         for group in range(groups if (os.cpu_count() or 1) > 1 else 1):
@@ -199,6 +200,8 @@ def start_for_command(argv):
     if (len(argv) < 2 or Path(argv[0]).name.split(".")[0] != "gongsynth" or argv[1] != "simulate"
             or any(a in ("-h", "--help", "milne-eddington", "--sun=milne-eddington") for a in argv)):
         return False
+    if "multiprocessing" in sys.modules and sys.modules["multiprocessing"].parent_process() is not None:
+        return False        # a sweep's worker (it has the command's argv): its parent started them
     try:
         return start()
     except Exception:   # never in the way of the import: the run compiles its kernels itself
@@ -235,7 +238,10 @@ def wait(*, progress=True):
         except subprocess.TimeoutExpired:
             job.kill()
             job.wait()
-    return time.monotonic() - began
+    waited = time.monotonic() - began
+    if progress:
+        log.info(f"gongsynth: kernels compiled ({waited:.0f} s waited)")
+    return waited
 
 
 def _argument_type(text):

@@ -53,26 +53,27 @@ def test_list_is_the_runs_kernels():
 
 @pytest.fixture
 def cache(tmp_path, monkeypatch):
-    """An empty numba cache for this process and the compilers it starts."""
+    """An empty numba cache for this process and the compilers it starts, and a tiny kernel module."""
     folder = tmp_path / "numba"
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(folder))
     monkeypatch.setattr(numba.config, "CACHE_DIR", str(folder))
     monkeypatch.delenv(precompile.ENV, raising=False)
+    (tmp_path / "fr_tiny_kernels.py").write_text(
+        "import numba\n\n\n@numba.njit(cache=True)\ndef add(a, b):\n    return a + b\n\n\n"
+        "@numba.njit(cache=True)\ndef total(x):\n    return x.sum()\n")
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join([str(tmp_path), os.environ.get("PYTHONPATH", "")]))
+    monkeypatch.syspath_prepend(str(tmp_path))
     return folder
 
 
-def test_background_compile(cache, tmp_path, monkeypatch):
+def test_background_compile(cache, tmp_path):
     """Two compilers fill an empty cache; the record then says compiled, and nothing starts again."""
-    from gongsynth.sun.model_atmosphere import builder
+    import fr_tiny_kernels
 
-    small = [[["gongsynth.sun.model_atmosphere.builder", "_flow",
-               ["int64", "int64"] + ["array(float64, 1d, C)"] * 3 + ["array(float64, 2d, C)"] * 5
-               + ["array(float32, 4d, C)"]]],
-             [["gongsynth.sun.model_atmosphere.builder", "_add_internetwork",
-               ["int64", "int64"] + ["array(float64, 1d, C)"] * 2 + ["array(float64, 2d, C)"] * 5
-               + ["array(float32, 4d, C)"]]]]
     kernels = tmp_path / "kernels.json"
-    kernels.write_text(json.dumps({"groups": small}))
+    groups = [[["fr_tiny_kernels", "add", ["int64", "float64"]]],
+              [["fr_tiny_kernels", "total", ["readonly array(float32, 2d, A)"]]]]
+    kernels.write_text(json.dumps({"groups": groups}))
     assert not precompile.compiled(kernels)
     assert precompile.start(kernels)
     assert not precompile.start(kernels)        # this process's compilers run already
@@ -82,16 +83,19 @@ def test_background_compile(cache, tmp_path, monkeypatch):
     record = json.loads((precompile._cache_folder() / precompile.MANIFEST).read_text())
     assert len(record["entries"]) == 2 and all(os.path.exists(index) for index, _, _ in record["entries"])
     assert not precompile.start(kernels)        # compiled: nothing to do
-    # The cache holds what the compilers made: a fresh dispatcher of the same kernel loads it.
-    flow = numba.njit(cache=True, nogil=True)(builder._flow.py_func)
-    assert flow._cache.load_overload(tuple(precompile._argument_type(t) for t in small[0][0][2]),
-                                     flow.targetctx) is not None
+    # This process loads what the compilers made: nothing compiles.
+    assert fr_tiny_kernels.add(1, 2.5) == 3.5
+    assert dict(fr_tiny_kernels.add._cache_hits) and not fr_tiny_kernels.add._cache_misses
+    # A changed source is a stale record.
+    source = tmp_path / "fr_tiny_kernels.py"
+    source.write_text(source.read_text() + "\n")
+    assert not precompile.compiled(kernels)
 
 
 def test_switched_off_and_stale(cache, tmp_path, monkeypatch):
     """``GONGSYNTH_PRECOMPILE=0`` starts nothing; a stale entry ends its compiler without a record."""
     kernels = tmp_path / "kernels.json"
-    kernels.write_text(json.dumps({"groups": [[["gongsynth.threads", "no_such_kernel", ["int64"]]]]}))
+    kernels.write_text(json.dumps({"groups": [[["fr_tiny_kernels", "no_such_kernel", ["int64"]]]]}))
     monkeypatch.setenv(precompile.ENV, "off")
     assert not precompile.enabled() and not precompile.start(kernels)
     monkeypatch.setenv(precompile.ENV, "1")
