@@ -69,8 +69,8 @@ _BOOT = ("import importlib.machinery, sys, types\n"
          "sys.exit(precompile._compile_here(sys.argv[2], int(sys.argv[3])))\n")
 
 _lock = threading.Lock()
-_jobs = []           # the running compilers (`subprocess.Popen`), started at
-_started = [None]
+_jobs = []           # this process's compilers (`subprocess.Popen`)
+_started = [None]    # when they were started (`time.monotonic`)
 
 
 def enabled():
