@@ -19,8 +19,13 @@ import importlib.abc
 import importlib.util
 import sys
 
-from gongsynth.products.maps import GONGSynthMap  # registers the map source with sunpy.map.Map
-from gongsynth.version import version as __version__
+from gongsynth import precompile as _precompile
+
+# A first ``gongsynth simulate``: its kernels compile in the background while sunpy imports.
+_precompile.start_for_command(sys.argv)
+
+from gongsynth.products.maps import GONGSynthMap  # noqa: E402 (registers the map source with sunpy.map.Map)
+from gongsynth.version import version as __version__  # noqa: E402
 
 __citation__ = (
     "Plowman, J. & Berger, T., Calibrating GONG Magnetograms with End-to-end Instrument "

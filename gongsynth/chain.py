@@ -35,7 +35,7 @@ import astropy.units as u
 import numpy as np
 from sunpy import log
 
-from gongsynth import instruments
+from gongsynth import instruments, precompile
 from gongsynth.geometry import Pointing, as_obstime, disk_geometry
 from gongsynth.observing import site_location
 from gongsynth.products.maps import PRODUCTS, make_product_map
@@ -223,7 +223,7 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
     -------
     `Chain`
     """
-    progress = progress and interactive()
+    verbose, progress = progress, progress and interactive()
     # Resolved once for every stage: the instrument object and the pointing with its Time.
     inst = instruments.get(config.instrument)
     pointing = Pointing(config.latitude, config.obstime)
@@ -235,6 +235,7 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
 
     if stokes is None and config.mode == "full-disk":
         def library():
+            precompile.wait(progress=verbose)     # a first run's kernels, compiling in the background
             knobs = {k: v for k, v in config.sun_arguments().items() if k not in ("shape", "pixel_size")}
             # The library's own fixed seed: every run seed shares it (and its cache); the
             # run's seed lays the patches out in the scene stage.
@@ -277,6 +278,7 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
     else:
         if stokes is None and config.sun == "model-atmosphere":
             def atmosphere_transfer(photosphere):
+                precompile.wait(progress=verbose)
                 # Deferred: the channels stage assembles and synthesises it block by block, never whole.
                 return {"stokes": DeferredTransfer(photosphere, mu=pointing.mu, azimuth=pointing.los_azimuth,
                                                    progress=progress, **line_of(inst))}
@@ -294,6 +296,7 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
                                 "Milne-Eddington Stokes spectra at the pointing's mu (deferred)"))
         elif isinstance(stokes, Atmosphere):
             def radiative_transfer():
+                precompile.wait(progress=verbose)
                 return {"stokes": rt_synthesize(stokes, mu=pointing.mu, azimuth=pointing.los_azimuth,
                                                 progress=progress, **line_of(inst))}
 

@@ -22,7 +22,7 @@ PACKAGE = Path(gongsynth.__file__).parent
 #: Module-name prefixes in flow order; the longest matching prefix decides a module's rank.
 LAYERS = (
     ("gongsynth.version", "gongsynth._version", "gongsynth.optional", "gongsynth.validation",
-     "gongsynth.seeding", "gongsynth.threads", "gongsynth.files", "gongsynth.tomlfmt",
+     "gongsynth.seeding", "gongsynth.threads", "gongsynth.precompile", "gongsynth.files", "gongsynth.tomlfmt",
      "gongsynth.instruments", "gongsynth.geometry", "gongsynth.observing"),
     ("gongsynth.sun.rt.atomic_data", "gongsynth.sun.rt.eos", "gongsynth.sun.rt.opacity",
      "gongsynth.sun.rt.hydrostatic"),

@@ -1,0 +1,116 @@
+"""The background compile of a first run's kernels (`gongsynth.precompile`, issue 26)."""
+import json
+import os
+
+import astropy.units as u
+import numba
+import pytest
+from numba.core.dispatcher import Dispatcher
+
+from gongsynth import precompile
+
+
+def _entries(groups):
+    return [tuple(entry[:2]) + (tuple(entry[2]),) for group in groups for entry in group]
+
+
+def test_argument_types_read_back():
+    """Every type of the shipped list reads back as the type numba prints."""
+    groups = precompile.load_kernels()
+    assert len(groups) == 2 and all(groups)
+    for _, _, types in _entries(groups):
+        for text in types:
+            assert str(precompile._argument_type(text)) == text
+
+
+def test_list_is_the_runs_kernels():
+    """
+    Each listed kernel of the 3-D Sun and the transfer is what a run calls, with those argument
+    types, and every kernel of theirs the run calls from Python is listed.  Failing: a kernel was
+    renamed or its arguments changed: rerun ``NUMBA_CACHE_DIR=$(mktemp -d)
+    GONGSYNTH_PRECOMPILE=0 python benchmarks/bench_compile.py --write-kernels``.
+    """
+    import importlib
+
+    from gongsynth.sun.model_atmosphere import model_atmosphere
+    from gongsynth.sun.rt import synthesize
+
+    # The run's builder and transfer on a small grid (the types do not depend on the sizes).
+    synthesize(model_atmosphere((16, 16), pixel_size=384 * u.km, seed=0, nz=16), mu=0.9,
+               azimuth=-90 * u.deg, progress=False)
+    listed = _entries(precompile.load_kernels())
+    names = {(module, name) for module, name, _ in listed}
+    for module, name, types in listed:
+        dispatcher = getattr(importlib.import_module(module), name)
+        assert isinstance(dispatcher, Dispatcher), (module, name)
+        if module.startswith("gongsynth.sun."):   # the scene's kernel: not called by this small run
+            assert types in {tuple(map(str, sig)) for sig in dispatcher.signatures}, (module, name)
+    for module in {module for module, _, _ in listed}:
+        for name, value in vars(importlib.import_module(module)).items():
+            if isinstance(value, Dispatcher) and value._cache_hits:
+                assert (module, name) in names, f"{module}.{name} is called by the run but not listed"
+
+
+@pytest.fixture
+def cache(tmp_path, monkeypatch):
+    """An empty numba cache for this process and the compilers it starts, and a tiny kernel module."""
+    folder = tmp_path / "numba"
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(folder))
+    monkeypatch.setattr(numba.config, "CACHE_DIR", str(folder))
+    monkeypatch.delenv(precompile.ENV, raising=False)
+    (tmp_path / "fr_tiny_kernels.py").write_text(
+        "import numba\n\n\n@numba.njit(cache=True)\ndef add(a, b):\n    return a + b\n\n\n"
+        "@numba.njit(cache=True)\ndef total(x):\n    return x.sum()\n")
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join([str(tmp_path), os.environ.get("PYTHONPATH", "")]))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    return folder
+
+
+def test_background_compile(cache, tmp_path):
+    """Two compilers fill an empty cache; the record then says compiled, and nothing starts again."""
+    import fr_tiny_kernels
+
+    kernels = tmp_path / "kernels.json"
+    groups = [[["fr_tiny_kernels", "add", ["int64", "float64"]]],
+              [["fr_tiny_kernels", "total", ["readonly array(float32, 2d, A)"]]]]
+    kernels.write_text(json.dumps({"groups": groups}))
+    assert not precompile.compiled(kernels)
+    assert precompile.start(kernels)
+    assert not precompile.start(kernels)        # this process's compilers run already
+    assert precompile.wait(progress=False) >= 0
+    assert precompile.wait(progress=False) == 0
+    assert precompile.compiled(kernels)
+    record = json.loads((precompile._cache_folder() / precompile.MANIFEST).read_text())
+    assert len(record["entries"]) == 2 and all(os.path.exists(index) for index, _, _ in record["entries"])
+    assert not precompile.start(kernels)        # compiled: nothing to do
+    # This process loads what the compilers made: nothing compiles.
+    assert fr_tiny_kernels.add(1, 2.5) == 3.5
+    assert dict(fr_tiny_kernels.add._cache_hits) and not fr_tiny_kernels.add._cache_misses
+    # A changed source is a stale record.
+    source = tmp_path / "fr_tiny_kernels.py"
+    source.write_text(source.read_text() + "\n")
+    assert not precompile.compiled(kernels)
+
+
+def test_switched_off_and_stale(cache, tmp_path, monkeypatch):
+    """``GONGSYNTH_PRECOMPILE=0`` starts nothing; a stale entry ends its compiler without a record."""
+    kernels = tmp_path / "kernels.json"
+    kernels.write_text(json.dumps({"groups": [[["fr_tiny_kernels", "no_such_kernel", ["int64"]]]]}))
+    monkeypatch.setenv(precompile.ENV, "off")
+    assert not precompile.enabled() and not precompile.start(kernels)
+    monkeypatch.setenv(precompile.ENV, "1")
+    assert precompile.start(kernels)
+    precompile.wait(progress=False)
+    assert not precompile.compiled(kernels)
+
+
+def test_started_by_the_simulate_command(monkeypatch):
+    """Only ``gongsynth simulate`` of a 3-D Sun run starts the compilers at import."""
+    calls = []
+    monkeypatch.setattr(precompile, "start", lambda: calls.append(1) or True)
+    assert precompile.start_for_command(["/venv/bin/gongsynth", "simulate", "--seed", "1"])
+    for argv in (["/venv/bin/gongsynth", "compare", "a", "b"], ["pytest", "simulate"],
+                 ["/venv/bin/gongsynth", "simulate", "--sun", "milne-eddington"],
+                 ["/venv/bin/gongsynth", "simulate", "--help"], ["gongsynth"]):
+        assert not precompile.start_for_command(argv)
+    assert calls == [1]
