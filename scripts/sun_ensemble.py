@@ -1,0 +1,139 @@
+r"""
+Measure every variant of the Sun-model ensemble against the observations, and its GONG weak-flux factor (issue 24, item 2).
+
+Two parts, each optional:
+
+``--constraints OUT.ecsv``
+    For each variant (`gongsynth.sun.model_atmosphere.ensemble.VARIANTS`):
+    `gongsynth.analysis.sun_constraints.sun_constraints` on a quiet box and a
+    spot box (seeded); one table, a row per variant and constraint, with the
+    observed value and accepted range beside each measured value.
+
+``--weak-flux OUT.ecsv``
+    For each variant, the default GONG run (`gongsynth.simulate`: 256² columns
+    of 384 km, GONG 860², 10 minutes) with the variant's ``[photosphere]``
+    knobs at each latitude and seed, through `gongsynth.run_cache.cached_runs`
+    (resumable with ``--cache``); the papers' quiet-Sun factor
+    (`gongsynth.weak_flux_factor`) pooled over the seeds with its block
+    bootstrap (the statistical part), the per-seed factors, and the paired
+    change from the default Sun with the same seeds
+    (`gongsynth.analysis.weak_flux.weak_flux_factor_difference`).  The
+    systematic band is the spread of the variants that pass the constraints.
+
+The numbers of ``docs/guide/sun_ensemble.rst`` came from::
+
+    python scripts/sun_ensemble.py --constraints docs/guide/sun_ensemble_constraints.ecsv
+    python scripts/sun_ensemble.py --weak-flux docs/guide/sun_ensemble_weak_flux.ecsv --cache runs \
+        --variants default small-spot large-umbra maltby-e-umbra ...
+"""
+import argparse
+import datetime
+import time
+from pathlib import Path
+
+import astropy.units as u
+import numpy as np
+from astropy.table import QTable, vstack
+
+from gongsynth.analysis.sun_constraints import sun_constraints
+from gongsynth.analysis.weak_flux import weak_flux_factor, weak_flux_factor_difference
+from gongsynth.config import SimulationConfig
+from gongsynth.run_cache import cached_runs, run_config
+from gongsynth.sun.model_atmosphere.ensemble import variant, variant_names
+from gongsynth.version import version
+
+
+def _cpu():
+    return time.process_time()
+
+
+def constraints(names, args):
+    """The constraints table of every variant."""
+    tables = []
+    for name in names:
+        start = _cpu()
+        table = sun_constraints(name, seed=args.seed)
+        table.add_column(name, name="variant", index=0)
+        tables.append(table)
+        bad = [row["constraint"] for row in table if row["within"] is np.False_ or row["within"] is False]
+        print(f"{name:>22s}: {_cpu() - start:5.1f} s CPU; outside: {', '.join(bad) or 'none'}", flush=True)
+    out = vstack(tables)
+    out.meta.update({"gongsynth_version": version, "seed": args.seed,
+                     "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")})
+    return out
+
+
+def weak_flux(names, args):
+    """Each variant's weak-flux factor at each latitude (pooled, per seed, paired change from the default)."""
+    configs, keys = [], []
+    for name in names:
+        for latitude in args.latitudes:
+            for seed in args.seeds:
+                configs.append(SimulationConfig.from_arguments(latitude=latitude * u.deg, seed=seed,
+                                                               photosphere=variant(name).photosphere()))
+                keys.append((name, latitude, seed))
+    runs = {}
+    start = _cpu()
+    for index, run in cached_runs(configs, cache=args.cache, workers=args.workers, desc="ensemble runs"):
+        runs[keys[index]] = run
+    print(f"runs: {_cpu() - start:.1f} s CPU in this process", flush=True)
+    rows = []
+    for name in names:
+        for latitude in args.latitudes:
+            mine = [runs[(name, latitude, seed)] for seed in args.seeds]
+            pooled = weak_flux_factor(mine, n_boot=args.n_boot)
+            per_seed = [weak_flux_factor(run, n_boot=0).factor for run in mine]
+            if name == "default":
+                change, change_error = 0.0, 0.0
+            else:
+                base = [runs[("default", latitude, seed)] for seed in args.seeds]
+                change, change_error = weak_flux_factor_difference(base, mine, n_boot=args.n_boot)
+            rows.append(dict(variant=name, latitude=latitude * u.deg, n_seeds=len(mine), factor=pooled.factor,
+                             bootstrap=pooled.uncertainty, seed_mean=float(np.mean(per_seed)),
+                             seed_spread=float(np.std(per_seed, ddof=1)) if len(per_seed) > 1 else np.nan,
+                             change=change, change_uncertainty=change_error))
+            print(f"{name:>22s} {latitude:4.0f}°: factor {pooled.factor:.3f} ± {pooled.uncertainty:.3f} "
+                  f"seeds [{', '.join(f'{f:.3f}' for f in per_seed)}] change {change:+.3f} ± {change_error:.3f}",
+                  flush=True)
+    table = QTable(rows=rows)
+    table.meta.update({
+        "gongsynth_version": version, "seeds": list(args.seeds), "n_boot": args.n_boot,
+        "config": run_config(SimulationConfig.from_arguments()).to_toml(comments=False),
+        "method": "default GONG run with each variant's [photosphere] knobs; factor = papers' quiet-Sun fit "
+                  "pooled over the seeds, bootstrap = its block bootstrap; change = paired difference from "
+                  "the default Sun with the same seeds (paired block bootstrap)",
+        "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+    })
+    return table
+
+
+def main(argv=None):
+    """Parse the arguments, measure, print and write the tables."""
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[1])
+    parser.add_argument("--variants", nargs="+", default=list(variant_names()), choices=variant_names())
+    parser.add_argument("--constraints", type=Path, help="write the constraints table here (ECSV)")
+    parser.add_argument("--weak-flux", type=Path, help="write the weak-flux table here (ECSV)")
+    parser.add_argument("--seed", type=int, default=1, help="seed of the constraint boxes")
+    parser.add_argument("--latitudes", type=float, nargs="+", default=[0.0, 60.0])
+    parser.add_argument("--seeds", type=int, nargs="+", default=[1, 2], help="seeds of the GONG runs")
+    parser.add_argument("--n-boot", type=int, default=50)
+    parser.add_argument("--workers", type=int)
+    parser.add_argument("--cache", type=Path)
+    args = parser.parse_args(argv)
+    if not (args.constraints or args.weak_flux):
+        parser.error("nothing to do: give --constraints and/or --weak-flux")
+    names = list(dict.fromkeys(args.variants))
+    if args.constraints:
+        table = constraints(names, args)
+        table.write(args.constraints, format="ascii.ecsv", overwrite=True)
+        print(f"wrote {args.constraints}")
+    if args.weak_flux:
+        if "default" not in names:
+            names.insert(0, "default")  # the paired changes need the default Sun's runs
+        table = weak_flux(names, args)
+        table.write(args.weak_flux, format="ascii.ecsv", overwrite=True)
+        print(f"wrote {args.weak_flux}")
+
+
+if __name__ == "__main__":
+    main()
