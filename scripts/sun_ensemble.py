@@ -1,5 +1,5 @@
 r"""
-Measure every variant of the Sun-model ensemble against the observations, and its GONG weak-flux factor (issue 24, item 2).
+Measure the Sun-model ensemble against the observations, and each variant's GONG weak-flux factor (issue 24).
 
 Two parts, each optional:
 
@@ -93,7 +93,8 @@ def weak_flux(names, args):
                              seed_spread=float(np.std(per_seed, ddof=1)) if len(per_seed) > 1 else np.nan,
                              change=change, change_uncertainty=change_error))
             print(f"{name:>22s} {latitude:4.0f}°: factor {pooled.factor:.3f} ± {pooled.uncertainty:.3f} "
-                  f"seeds [{', '.join(f'{f:.3f}' for f in per_seed)}] change {change:+.3f} ± {change_error:.3f}",
+                  f"seeds [{', '.join(f'{f:.3f}' for f in per_seed)}] "
+                  f"change {change:+.3f} ± {change_error:.3f}",
                   flush=True)
     table = QTable(rows=rows)
     table.meta.update({

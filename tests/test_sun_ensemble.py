@@ -5,8 +5,13 @@ import astropy.units as u
 import numpy as np
 import pytest
 
-from gongsynth.analysis.sun_constraints import (CONSTRAINTS, constraint_table, measure_quiet, measure_spot,
-                                                sun_constraints)
+from gongsynth.analysis.sun_constraints import (
+    CONSTRAINTS,
+    constraint_table,
+    measure_quiet,
+    measure_spot,
+    sun_constraints,
+)
 from gongsynth.config import SimulationConfig
 from gongsynth.sun.model_atmosphere import model_atmosphere
 from gongsynth.sun.model_atmosphere.ensemble import VARIANTS, SunVariant, variant, variant_names
@@ -49,8 +54,9 @@ def test_bad_names_and_arguments_fail_early():
 
 def test_verdicts_follow_the_ranges():
     low, high = CONSTRAINTS["umbral_area_fraction"].low, CONSTRAINTS["umbral_area_fraction"].high
-    for value, verdict in ((low - 0.01, "outside"), (low, "within"), (high, "within"), (high + 0.01, "outside"),
-                           (np.nan, "outside")):
+    cases = ((low - 0.01, "outside"), (low, "within"), (high, "within"), (high + 0.01, "outside"),
+             (np.nan, "outside"))
+    for value, verdict in cases:
         assert constraint_table({"umbral_area_fraction": value})["verdict"][0] == verdict
     # one-sided (a lower bound only) and reported-only constraints
     table = constraint_table({"network_flux_density": 1e3, "spot_area": 1.0, "limb_darkening_ni": 0.0})

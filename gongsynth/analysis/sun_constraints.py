@@ -88,7 +88,8 @@ CONSTRAINTS = {
     "line_fwhm_clv_fe": Constraint("Fe I 617.3 FWHM(mu) / FWHM(1)", "", _NAN, _NAN, _NAN,
                                    "no published value found: reported only"),
     "bright_point_contrast": Constraint(
-        "continuum contrast of kG pixels against field-free quiet Sun, 676.8 nm, mu = 1", "", 0.085, 0.03, 0.15,
+        "continuum contrast of kG pixels against field-free quiet Sun, 676.8 nm, mu = 1", "",
+        0.085, 0.03, 0.15,
         "network kG patches +10 % at 630 nm, plage -3 % (Buehler et al. 2019, A&A 630, A86); bright points "
         "+7 % at 668 nm deconvolved (Mathew et al. 2009); range: the network values +- 0.04"),
     "element_wilson_depression": Constraint("Wilson depression of the kG elements", "km", _NAN, _NAN, _NAN,

@@ -1,5 +1,5 @@
 r"""
-The Sun-model ensemble: named variants of the built-in 3-D Sun, each a frozen set of `model_atmosphere` arguments.
+The Sun-model ensemble: named variants of the built-in 3-D Sun, each a frozen set of builder arguments.
 
 The built-in Sun (`~gongsynth.sun.model_atmosphere.model_atmosphere`) fixes
 each of its uncertain parts at one choice: the kG elements' temperature model,
@@ -39,7 +39,7 @@ _GRID_ARGUMENTS = ("shape", "pixel_size", "seed", "nz", "height_range")
 @dataclass(frozen=True)
 class SunVariant:
     """
-    One member of the Sun-model ensemble: changed `model_atmosphere` arguments, their source, what probes them.
+    One member of the ensemble: changed `model_atmosphere` arguments, their source, what probes them.
 
     Attributes
     ----------
