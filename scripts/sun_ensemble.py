@@ -55,7 +55,7 @@ def constraints(names, args):
         table = sun_constraints(name, seed=args.seed)
         table.add_column(name, name="variant", index=0)
         tables.append(table)
-        bad = [row["constraint"] for row in table if row["within"] is np.False_ or row["within"] is False]
+        bad = [c for c, verdict in zip(table["constraint"], table["verdict"]) if verdict == "outside"]
         print(f"{name:>22s}: {_cpu() - start:5.1f} s CPU; outside: {', '.join(bad) or 'none'}", flush=True)
     out = vstack(tables)
     out.meta.update({"gongsynth_version": version, "seed": args.seed,
@@ -108,6 +108,58 @@ def weak_flux(names, args):
     return table
 
 
+def _fmt(value):
+    return "–" if not np.isfinite(value) else f"{value:.3g}" if abs(value) < 100 else f"{value:.0f}"
+
+
+def constraints_rst(table):
+    """The constraints table as RST: a row per constraint, a column per variant (value, * when outside)."""
+    names = list(dict.fromkeys(table["variant"]))
+    rows = list(dict.fromkeys(table["constraint"]))
+    lines = [".. list-table:: Each variant's constraint values (* outside the accepted range)",
+             "   :header-rows: 1", "   :stub-columns: 1", "",
+             "   * - constraint", "     - accepted", *[f"     - {n}" for n in names]]
+    for name in rows:
+        first = table[table["constraint"] == name][0]
+        low, high, unit = first["low"], first["high"], str(first["unit"])
+        accepted = ("reported" if not (np.isfinite(low) or np.isfinite(high))
+                    else f"≥ {_fmt(low)}" if not np.isfinite(high) else f"{_fmt(low)} – {_fmt(high)}")
+        unit = f" ({unit})" if unit and accepted == "reported" else f" {unit}" if unit else ""
+        lines += [f"   * - ``{name}``", f"     - {accepted}{unit}"]
+        for variant_name in names:
+            row = table[(table["variant"] == variant_name) & (table["constraint"] == name)]
+            cell = "" if not len(row) else _fmt(row[0]["value"]) + ("\\*" if row[0]["verdict"] == "outside"
+                                                                     else "")
+            lines.append(f"     - {cell}")
+    return "\n".join(lines) + "\n"
+
+
+def variants_rst():
+    """The ensemble's variants as RST: name, changed arguments, source."""
+    lines = [".. list-table:: The variants (arguments of ``model_atmosphere``; the rest at the defaults)",
+             "   :header-rows: 1", "   :widths: 15 25 60", "",
+             "   * - variant", "     - changes", "     - source"]
+    for name in variant_names():
+        member = variant(name)
+        changes = ", ".join(f"``{k} = {v}``" for k, v in member.changes.items()) or "(none)"
+        lines += [f"   * - {name}", f"     - {changes}", f"     - {member.source}"]
+    return "\n".join(lines) + "\n"
+
+
+def weak_flux_rst(table):
+    """The weak-flux table as RST."""
+    lines = [".. list-table:: GONG weak-flux factor of each variant (default run, seeds pooled)",
+             "   :header-rows: 1", "",
+             "   * - variant", "     - latitude", "     - factor ± bootstrap",
+             "     - per-seed mean ± spread", "     - change from default (paired)"]
+    for row in table:
+        lines += [f"   * - {row['variant']}", f"     - {row['latitude'].to_value(u.deg):.0f}°",
+                  f"     - {row['factor']:.3f} ± {row['bootstrap']:.3f}",
+                  f"     - {row['seed_mean']:.3f} ± {row['seed_spread']:.3f}",
+                  f"     - {row['change']:+.3f} ± {row['change_uncertainty']:.3f}"]
+    return "\n".join(lines) + "\n"
+
+
 def main(argv=None):
     """Parse the arguments, measure, print and write the tables."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[1])
@@ -120,6 +172,7 @@ def main(argv=None):
     parser.add_argument("--n-boot", type=int, default=50)
     parser.add_argument("--workers", type=int)
     parser.add_argument("--cache", type=Path)
+    parser.add_argument("--rst", action="store_true", help="also write each table as RST (.txt beside it)")
     args = parser.parse_args(argv)
     if not (args.constraints or args.weak_flux):
         parser.error("nothing to do: give --constraints and/or --weak-flux")
@@ -128,12 +181,17 @@ def main(argv=None):
         table = constraints(names, args)
         table.write(args.constraints, format="ascii.ecsv", overwrite=True)
         print(f"wrote {args.constraints}")
+        if args.rst:
+            args.constraints.with_suffix(".txt").write_text(constraints_rst(table))
+            args.constraints.with_name("sun_ensemble_variants.txt").write_text(variants_rst())
     if args.weak_flux:
         if "default" not in names:
             names.insert(0, "default")  # the paired changes need the default Sun's runs
         table = weak_flux(names, args)
         table.write(args.weak_flux, format="ascii.ecsv", overwrite=True)
         print(f"wrote {args.weak_flux}")
+        if args.rst:
+            args.weak_flux.with_suffix(".txt").write_text(weak_flux_rst(table))
 
 
 if __name__ == "__main__":

@@ -11,7 +11,9 @@ built on two small seeded boxes and synthesised with
   their centre-to-limb change at a second μ (on rays inclined through the box),
   the continuum's limb darkening, the continuum contrast of the kG elements
   (pixels whose field at the elements' base plane exceeds half the element
-  field) against the field-free quiet Sun, and the flux densities at the
+  field) against the field-free quiet Sun (the disk-centre continuum at the
+  diffraction limit of Hinode's 50 cm aperture, as the deconvolved
+  observations it is compared with), and the flux densities at the
   paper's truth height (175 km above τ = 1), averaged over 2 × 2 columns
   (192 km, about Hinode SP's 0.32″ pixels: the observations' resolution);
 - a **spot box** (default 128² columns of 384 km, 49 Mm) with the sunspot: the
