@@ -42,6 +42,10 @@ from gongsynth.run_cache import cached_runs, run_config
 from gongsynth.sun.model_atmosphere.ensemble import variant, variant_names
 from gongsynth.version import version
 
+#: The constraints measured on the spot box (`gongsynth.analysis.sun_constraints.measure_spot`).
+SPOT_ROWS = ("umbral_core_intensity", "penumbral_intensity", "umbral_area_fraction", "spot_area",
+             "umbral_wilson_depression")
+
 
 def _cpu():
     return time.process_time()
@@ -50,9 +54,20 @@ def _cpu():
 def constraints(names, args):
     """The constraints table of every variant."""
     tables = []
+    default_quiet = None
     for name in names:
         start = _cpu()
-        table = sun_constraints(name, seed=args.seed)
+        member = variant(name)
+        # A spot-only variant's quiet box is the default's (same bits: SPOT_ARGUMENTS); a variant that
+        # leaves the spot alone is measured on the quiet box only (its spot rows stay empty).
+        quiet = member.spot_only and default_quiet is not None
+        spot = not member.changes or member.spot_only
+        table = sun_constraints(name, seed=args.seed, quiet_shape=None if quiet else (160, 160),
+                                spot_shape=(128, 128) if spot else None)
+        if name == "default":
+            default_quiet = table[[c not in SPOT_ROWS for c in table["constraint"]]]
+        if quiet:
+            table = vstack([default_quiet, table])
         table.add_column(name, name="variant", index=0)
         tables.append(table)
         bad = [c for c, verdict in zip(table["constraint"], table["verdict"]) if verdict == "outside"]
@@ -176,7 +191,7 @@ def main(argv=None):
     args = parser.parse_args(argv)
     if not (args.constraints or args.weak_flux):
         parser.error("nothing to do: give --constraints and/or --weak-flux")
-    names = list(dict.fromkeys(args.variants))
+    names = sorted(dict.fromkeys(args.variants), key=lambda n: n != "default")  # the default first
     if args.constraints:
         table = constraints(names, args)
         table.write(args.constraints, format="ascii.ecsv", overwrite=True)

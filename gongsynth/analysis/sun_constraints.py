@@ -343,8 +343,9 @@ def sun_constraints(variant="default", *, seed=1, mu=0.5, quiet_shape=(160, 160)
         Seed of both boxes.
     mu : float
         cos θ of the centre-to-limb values.
-    quiet_shape, quiet_pixel : tuple, `~astropy.units.Quantity`
-        The quiet box (no spot).
+    quiet_shape, quiet_pixel : tuple, `~astropy.units.Quantity`, or None
+        The quiet box (no spot); ``quiet_shape=None`` skips the quiet-Sun
+        constraints.
     spot_shape, spot_pixel : tuple, `~astropy.units.Quantity`, or None
         The spot box (it must hold the spot and 4 Mm of quiet Sun beyond the
         penumbra); ``spot_shape=None`` skips the spot constraints.
@@ -357,8 +358,10 @@ def sun_constraints(variant="default", *, seed=1, mu=0.5, quiet_shape=(160, 160)
         `constraint_table` of the measured values.
     """
     member = get_variant(variant)
-    quiet = member.atmosphere(quiet_shape, quiet_pixel, seed=seed, nz=nz, spot=False)
-    values = measure_quiet(quiet, mu=mu)
+    values = {}
+    if quiet_shape is not None:
+        values.update(measure_quiet(member.atmosphere(quiet_shape, quiet_pixel, seed=seed, nz=nz, spot=False),
+                                    mu=mu))
     if spot_shape is not None:
         values.update(measure_spot(member.atmosphere(spot_shape, spot_pixel, seed=seed, nz=nz, spot=True)))
     return constraint_table(values, mu=mu)

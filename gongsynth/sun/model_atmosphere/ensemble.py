@@ -30,10 +30,15 @@ import astropy.units as u
 
 from gongsynth.sun.model_atmosphere.builder import model_atmosphere
 
-__all__ = ["SunVariant", "VARIANTS", "variant", "variant_names"]
+__all__ = ["SunVariant", "VARIANTS", "SPOT_ARGUMENTS", "variant", "variant_names"]
 
 #: Arguments of `model_atmosphere` that set the grid or the randomness, not the Sun: never part of a variant.
 _GRID_ARGUMENTS = ("shape", "pixel_size", "seed", "nz", "height_range")
+
+#: Arguments that shape only the sunspot: a box without its spot (``spot=False``) is the same bits
+#: whatever their values (the spot has its own random stream and stratifications).
+SPOT_ARGUMENTS = ("umbra_radius", "penumbra_radius", "umbra_field", "penumbra_field", "umbra_model",
+                  "evershed_speed", "moat_speed")
 
 
 @dataclass(frozen=True)
@@ -100,6 +105,11 @@ class SunVariant:
             raise ValueError(f"variant {self.name!r} sets {clash} itself; choose another variant instead")
         return model_atmosphere(shape, pixel_size, seed=seed, **grid, **self.changes)
 
+    @property
+    def spot_only(self):
+        """True when the variant changes only `SPOT_ARGUMENTS`: its spotless boxes are the default Sun's."""
+        return bool(self.changes) and set(self.changes) <= set(SPOT_ARGUMENTS)
+
     def photosphere(self):
         """
         The variant as a run's ``[photosphere]`` knobs (`gongsynth.config.SimulationConfig.photosphere`).
@@ -130,8 +140,8 @@ VARIANTS = types.MappingProxyType({v.name: v for v in (
     _variant("default", "the builder's defaults (gongsynth.sun.model_atmosphere.builder)", ()),
     _variant("plage-elements",
              "kG elements with Solanki's plage flux-tube model instead of the network one (tables.py: "
-             "cooler than network tubes, as Buehler et al. 2019, A&A 630, A86 find plage kG patches 3 % "
-             "darker than network ones at disk centre)", ("bright_point_contrast",),
+             "6780 K instead of 6960 K at log tau = 0; Buehler et al. 2019, A&A 630, A86 find plage kG "
+             "patches 13 % darker than network ones at disk centre)", ("bright_point_contrast",),
              element_model="plage"),
     _variant("cool-elements",
              "kG elements at the quiet HSRA temperature (the builder's 'no hot tubes' ablation): only "
