@@ -302,7 +302,7 @@ def constraint_table(values, *, mu=0.5):
     Examples
     --------
     >>> t = constraint_table({"umbral_area_fraction": 0.19, "spot_area": 260.0})
-    >>> list(t["verdict"])
+    >>> [str(v) for v in t["verdict"]]
     ['outside', 'reported']
     """
     unknown = sorted(set(values) - set(CONSTRAINTS))
