@@ -16,8 +16,10 @@ through `gongsynth.run_cache.cached_runs` (a rerun reads the runs from
   the quiet curve right up to the strong pixels), with finite truth through
   the PSF, and nearer to a strong pixel than to the edge of the quarter (so
   no strong pixel outside it could be nearer);
-- each quiet pixel's **distance** on the Sun to the nearest strong pixel
-  (`~gongsynth.analysis.scene_calibration.strong_field_distance`) and its
+- each quiet pixel's **distance** on the Sun to the nearest strong pixel (in
+  the tile, rows foreshortened by cos(latitude): `run_context`; on a real map
+  `~gongsynth.analysis.scene_calibration.strong_field_distance` measures it
+  from the pixels' heliographic positions) and its
   **local flux density**, the mean |B_meas| over 11 × 11 pixels (27.5″,
   20 Mm at disk centre; `~gongsynth.analysis.scene_calibration.local_flux_density`).
 
@@ -31,11 +33,11 @@ error is 3-10 times smaller than that scatter).  The distance table goes to
 ``--table`` (shipped as ``gongsynth/data/scene_factors.ecsv``, which
 ``calibrate(..., scene="distance")`` applies); both measurements to ``--out``::
 
-    python scripts/scene_dependence.py --latitudes 0 25 45 60 --seeds 1 2 3 --cache runs \
+    python scripts/scene_dependence.py --latitudes 0 25 45 60 75 --seeds 1 2 3 4 --cache runs \
         --table gongsynth/data/scene_factors.ecsv --out docs/guide/scene_dependence.ecsv \
         --summary docs/guide/scene_dependence.txt
 
-About 20 s of CPU per run (12 runs: 4 CPU-minutes) and 10 s per run for the analysis.
+About 21 s of CPU per run (the 20 runs above: 7 CPU-minutes) and 3 s per run for the analysis.
 """
 import argparse
 import datetime
@@ -46,13 +48,11 @@ import numpy as np
 import scipy.ndimage
 from astropy.table import QTable
 
-from gongsynth.analysis.apply_calibration import viewing_angle
 from gongsynth.analysis.calibration import gauss_values
 from gongsynth.analysis.scene_calibration import (
     DISTANCE_EDGES,
     local_flux_density,
     scene_table,
-    strong_field_distance,
     strong_field_mask,
 )
 from gongsynth.analysis.weak_flux import QUIET_LIMIT, flux_conserving_fit
@@ -68,18 +68,26 @@ SIDE = 11
 
 
 def run_context(run):
-    """Measured and true field, distance (Mm) and local flux density (G) of a run's usable quiet pixels."""
+    """Measured and true field, distance (Mm) and local flux density (G) of a run's usable quiet pixels.
+
+    A tiled run's WCS places its field on a full disk, but the field is the model's box seen at
+    ``config.latitude`` on the central meridian: the viewing angle is that latitude everywhere, and
+    distances on the Sun are those in the tile with its north-south axis (rows) foreshortened by
+    cos(latitude).  (`~gongsynth.analysis.scene_calibration.strong_field_distance` measures the same
+    distance on a real map, from its pixels' heliographic positions.)
+    """
     m = gauss_values(run.magnetogram, "magnetogram")
     t = gauss_values(run.truth_psf, "truth_psf")
-    theta = viewing_angle(run.magnetogram).to_value(u.deg)
+    latitude = run.config.latitude.to(u.deg)
     usable = np.asarray(run.resolution_map) == 1
-    strong = strong_field_mask(m, theta) & usable
-    distance = strong_field_distance(run.magnetogram, strong, usable=usable).to_value(u.Mm)
-    # Distance to the quarter's edge on the sky, a lower bound of the distance on the Sun.
+    strong = strong_field_mask(m, np.full(m.shape, latitude.value)) & usable
     pixel = abs(u.Quantity(run.magnetogram.scale.axis1).to_value(u.rad / u.pix))
-    km_per_pixel = run.magnetogram.dsun.to_value(u.Mm) * np.tan(pixel)
-    edge = scipy.ndimage.distance_transform_edt(usable) * km_per_pixel
-    quiet = usable & ~strong & np.isfinite(m) & np.isfinite(t) & np.isfinite(distance) & (distance < edge)
+    # The surface at disk centre lies one solar radius nearer than the Sun's centre.
+    mm = (run.magnetogram.dsun - run.magnetogram.rsun_meters).to_value(u.Mm) * np.tan(pixel)
+    sampling = (mm / np.cos(latitude.to_value(u.rad)), mm)
+    distance = scipy.ndimage.distance_transform_edt(~strong, sampling=sampling)
+    edge = scipy.ndimage.distance_transform_edt(usable, sampling=sampling)
+    quiet = usable & ~strong & np.isfinite(m) & np.isfinite(t) & (distance < edge)
     density = local_flux_density(np.where(usable, m, np.nan), SIDE).to_value(u.G)
     return m[quiet], t[quiet], distance[quiet], density[quiet]
 
@@ -172,9 +180,10 @@ def main(argv=None):
         "seeds": list(args.seeds), "latitudes": [f"{lat:g} deg" for lat in args.latitudes], "bins": args.bins,
         "threshold": f"{QUIET_LIMIT.to_value(u.G)} G",
         "method": "strong pixels: |B_meas| >= threshold x cos(theta) in the measured map "
-                  "(native-resolution quarter); quiet pixels: the others with finite truth through the PSF, "
-                  "nearer to a strong pixel than to the quarter's edge; distance: great-circle distance on "
-                  "the Sun to the nearest strong pixel; per distance group the papers' flux-conserving fit "
+                  "(native-resolution quarter, theta = the run's latitude); quiet pixels: the others with "
+                  "finite truth through the PSF, nearer to a strong pixel than to the quarter's edge; "
+                  "distance: on the Sun to the nearest strong pixel (the tile's rows foreshortened by "
+                  "cos(latitude)); per distance group the papers' flux-conserving fit "
                   "with the same bins, factor = slope at zero, ratio = factor / the same fit over all the "
                   "run's quiet pixels; mean and standard error over seeds",
         "script": "scripts/scene_dependence.py",

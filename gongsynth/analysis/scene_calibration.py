@@ -50,8 +50,11 @@ __all__ = ["SCENE_TABLE", "DISTANCE_EDGES", "strong_field_mask", "strong_field_d
 SCENE_TABLE = "scene_factors.ecsv"
 
 #: Edges of the distance groups (Mm on the Sun): the sunspot's penumbra has a radius of 16 Mm in the
-#: built-in Sun, its box 98 Mm, so no pixel there lies much more than 50 Mm from the spot.
-DISTANCE_EDGES = (0, 5, 10, 20, 35, np.inf) * u.Mm
+#: built-in Sun, its box 98 Mm, so no pixel there lies much more than 50 Mm from the spot.  Quiet pixels
+#: within 5 Mm are the spot's blurred edge, few of them weak: their fit's slope at zero is
+#: ill-conditioned (0.02 ± 0.01 at disk centre, 3.0 ± 0.6 at 45°), so they form no group, and
+#: `scene_ratio` gives them the nearest group's ratio.
+DISTANCE_EDGES = (5, 10, 20, 35, np.inf) * u.Mm
 
 _COLUMNS = {"latitude", "distance_min", "distance_max", "distance", "ratio", "uncertainty"}
 
