@@ -246,7 +246,7 @@ def summary(table):
                      f"({row['flux_ratio_seeds']:.3f})",
                      f"{row['slope']:.3f} ± {row['slope_uncertainty']:.3f} ± {row['slope_table']:.3f} "
                      f"({row['slope_seeds']:.3f})"])
-    return QTable(rows=rows, names=["pair", "|lat| (deg)", "GONG by", "raw flux ratio", "raw slope",
+    return QTable(rows=rows, names=["pair", "latitudes (deg)", "GONG by", "raw flux ratio", "raw slope",
                                     "calibrated flux ratio", "calibrated slope"])
 
 

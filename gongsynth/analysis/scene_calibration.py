@@ -61,7 +61,9 @@ _COLUMNS = {"latitude", "distance_min", "distance_max", "distance", "ratio", "un
 
 def strong_field_mask(values, theta, threshold=QUIET_LIMIT):
     r"""
-    The strong-field pixels: :math:`|B| \ge` ``threshold`` × cos θ.
+    The strong-field pixels of a map: field strength at least ``threshold`` × cos θ.
+
+    :math:`|B| \ge` ``threshold`` × cos θ, with θ each pixel's viewing angle.
 
     Parameters
     ----------
