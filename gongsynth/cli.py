@@ -11,7 +11,7 @@ The ``gongsynth`` command line.
                        --out DIR
     gongsynth compare SIM.fits OBS.fits [--out FIGURE.png]
     gongsynth calibrate IN.fits --out OUT.fits [--to truth|hmi|mdi|gong] [--instrument NAME]
-                        [--table TABLE.ecsv] [--overwrite] [--open-flux]
+                        [--table TABLE.ecsv] [--scene angle|distance] [--overwrite] [--open-flux]
     gongsynth config --print-defaults
 
 Exit codes (`EXIT_CODES`; ``gongsynth --help`` lists them with what to do):
@@ -181,6 +181,10 @@ def build_parser():
     cal.add_argument("--instrument", dest="source", metavar="NAME",
                      help="with --to an instrument: the map's own instrument ('gong', 'hmi', 'mdi') when "
                           "its header does not say")
+    cal.add_argument("--scene", choices=("angle", "distance"), default="angle",
+                     help="'angle' (default): the curves at each pixel's viewing angle; 'distance': each "
+                          "quiet pixel also times the shipped scene table's ratio at its distance from the "
+                          "map's own strong fields (|B| >= 400 G cos theta)")
     cal.add_argument("--overwrite", action="store_true", help="replace an existing output file")
     cal.add_argument("--open-flux", dest="open_flux", action="store_true",
                      help="synoptic maps: also the PFSS open flux (source surface 2.5 R_sun) before and "
@@ -427,7 +431,8 @@ def _run_calibrate(args):
                          f"{', '.join(_FITS_SUFFIXES)} (.gz: compressed)")
     check_writable([args.out], args.overwrite)
     smap = load_observation(args.magnetogram)
-    calibrated = calibrate(smap, table=args.table, force=args.force, to=args.to, instrument=args.source)
+    calibrated = calibrate(smap, table=args.table, force=args.force, to=args.to, instrument=args.source,
+                           scene=args.scene)
     if args.open_flux:
         _record_open_flux(smap, calibrated)
     with atomic_path(args.out, overwrite=args.overwrite) as tmp:

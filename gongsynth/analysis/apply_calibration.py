@@ -18,6 +18,16 @@ Rules (documented in the guide's calibration page):
   (the papers' quiet-Sun limit), the sunspot curve elsewhere (or the
   quiet-Sun curve if the table has no sunspot rows).  Off-disk and NaN
   pixels stay NaN.
+- **Scene** (``scene="distance"``, opt-in): each quiet pixel's calibrated
+  value is multiplied by the scene table's ratio at its θ and its distance on
+  the Sun to the nearest strong pixel of the map itself (|B_measured| ≥ the
+  table's threshold × cos θ, by default the same 400 G × cos θ;
+  `gongsynth.analysis.scene_calibration`; shipped:
+  ``gongsynth/data/scene_factors.ecsv``).  The default ``scene="angle"``
+  applies the angle-only curves: the scene table was measured on one model
+  scene (one spot size) at GONG's native 2.5″ pixels, where the threshold
+  finds the spot; on coarser maps (synoptic maps' 1°) the same threshold
+  finds fewer strong pixels, and the distances mean something else.
 - **To another instrument's scale** (``to="hmi"``, ``to="mdi"``, ``to="gong"``): the map's instrument is
   read from its header (`map_instrument`); each pixel is multiplied by the
   predicted conversion factor at its viewing angle, interpolated in θ like
@@ -35,9 +45,20 @@ from gongsynth.analysis.calibration import gauss_values
 from gongsynth.analysis.calibration_table import read_calibration_table, table_curve
 from gongsynth.analysis.cross_calibration_table import conversion_factors, read_cross_calibration_table
 from gongsynth.analysis.disk import check_map, disk_coordinates
+from gongsynth.analysis.scene_calibration import (
+    read_scene_table,
+    scene_ratio,
+    strong_field_distance,
+    strong_field_mask,
+)
 from gongsynth.analysis.weak_flux import QUIET_LIMIT
 
-__all__ = ["is_synoptic", "viewing_angle", "map_instrument", "calibrate", "weak_flux_factor_map"]
+__all__ = ["SCENES", "is_synoptic", "viewing_angle", "map_instrument", "calibrate", "weak_flux_factor_map",
+           "scene_factor_map"]
+
+#: The values of `calibrate`'s ``scene``: the angle-only table (default), or with the distance from
+#: strong fields.
+SCENES = ("angle", "distance")
 
 
 def is_synoptic(smap):
@@ -182,7 +203,7 @@ def _apply(values, theta, table, region):
     return out
 
 
-def calibrate(smap, *, table=None, force=False, to="truth", instrument=None):
+def calibrate(smap, *, table=None, force=False, to="truth", instrument=None, scene="angle", scene_table=None):
     """
     Calibrate a magnetogram: each value replaced by the true B_LOS it implies, or put on another scale.
 
@@ -213,12 +234,23 @@ def calibrate(smap, *, table=None, force=False, to="truth", instrument=None):
         The map's instrument (``"gong"``, ``"hmi"``, ``"mdi"``) for ``to``
         other than ``"truth"``; default read from its header
         (`map_instrument`, which raises ValueError when the header names none).
+    scene : {"angle", "distance"}
+        ``"angle"`` (default): the curves of the table at each pixel's θ.
+        ``"distance"``: besides, each quiet pixel's value times the scene
+        table's ratio at its θ and distance from the map's own strong pixels
+        (`scene_factor_map`; module notes).  Only with the calibration
+        curves (``to="truth"`` and a calibration table).
+    scene_table : `~astropy.table.QTable` or path-like, optional
+        The scene table for ``scene="distance"``
+        (`gongsynth.analysis.scene_calibration.read_scene_table`); default the
+        shipped one.
 
     Returns
     -------
     `~sunpy.map.GenericMap`
         Same WCS and metadata, calibrated data in G, with ``CALTABLE`` naming
-        the table (and ``CALTO`` the target scale) and a HISTORY line.
+        the table (``CALTO`` the target scale; ``CALSCENE`` the scene table
+        with ``scene="distance"``) and a HISTORY line.
 
     Examples
     --------
@@ -243,7 +275,15 @@ def calibrate(smap, *, table=None, force=False, to="truth", instrument=None):
         raise ValueError(f"the map is a ground-truth map (CONTENT = {content!r}), not a measurement: "
                          f"calibrate the magnetogram, or force it (calibrate --force)")
     to = _scale_name(to, "to", truth=True)
-    if to != "truth" or (hasattr(table, "colnames") and "target" in table.colnames):
+    if scene not in SCENES:
+        raise ValueError(f"scene must be one of {SCENES}, got {scene!r}")
+    conversion = to != "truth" or (hasattr(table, "colnames") and "target" in table.colnames)
+    if scene != "angle" and conversion:
+        raise ValueError("scene='distance' applies to the calibration curves only (to='truth' with a "
+                         "calibration table), not to a conversion table's factors")
+    if scene_table is not None and scene == "angle":
+        raise ValueError("scene_table is used only with scene='distance'")
+    if conversion:
         return _convert(smap, to, table, instrument)
     if instrument is not None:
         raise ValueError("instrument is used only with to= another instrument (the truth table is GONG's)")
@@ -263,11 +303,57 @@ def calibrate(smap, *, table=None, force=False, to="truth", instrument=None):
     if strong.any():
         out[strong] = _apply(measured[strong], theta[strong], table, "sunspot")
     meta = smap.meta.copy()
+    how = "truth = g(measured, theta) from the papers' flux-conserving curves"
+    if scene == "distance":
+        scene_table = _scene_table(scene_table)
+        out[quiet] *= _scene_ratio(smap, measured, theta, scene_table)[quiet]
+        meta["calscene"] = str(scene_table.meta.get("source", "in-memory table"))[:68]
+        how += ", quiet pixels x ratio(theta, distance from |B| >= threshold cos theta)"
     meta["bunit"] = "G"
     meta["caltable"] = str(table.meta.get("source", "in-memory table"))[:68]
-    meta["history"] = (str(meta.get("history", "")) + "\ngongsynth.calibrate: truth = g(measured, theta) "
-                       "from the papers' flux-conserving curves").strip()
+    meta["history"] = (str(meta.get("history", "")) + f"\ngongsynth.calibrate: {how}").strip()
     return sunpy.map.Map(out, meta)
+
+
+def _scene_table(table):
+    if table is None or not hasattr(table, "colnames"):
+        return read_scene_table(table)
+    if "threshold" not in table.meta:
+        raise ValueError("scene_table has no 'threshold' in its metadata (see read_scene_table)")
+    return table
+
+
+def _scene_ratio(smap, measured, theta, table):
+    """The scene table's ratio at every pixel (NaN off the disk)."""
+    threshold = u.Quantity(table.meta["threshold"])
+    distance = strong_field_distance(smap, strong_field_mask(measured, theta, threshold))
+    return scene_ratio(table, theta, distance)
+
+
+def scene_factor_map(smap, *, table=None):
+    """
+    The scene ratio that ``calibrate(smap, scene="distance")`` applies to each quiet pixel.
+
+    Parameters
+    ----------
+    smap : `~sunpy.map.GenericMap`
+        A magnetogram (G) that `viewing_angle` understands.
+    table : `~astropy.table.QTable` or path-like, optional
+        A scene table; default the shipped one.
+
+    Returns
+    -------
+    `~sunpy.map.GenericMap`
+        Dimensionless ratios on the map's grid (NaN off the disk); the strong
+        pixels, which keep the sunspot curve, have theirs too.
+    """
+    check_map(smap)
+    table = _scene_table(table)
+    measured = gauss_values(smap, "smap")
+    ratio = _scene_ratio(smap, measured, viewing_angle(smap).to_value(u.deg), table)
+    meta = smap.meta.copy()
+    meta["bunit"] = ""
+    return sunpy.map.Map(ratio, meta)
 
 
 def _scale_name(name, argument, *, truth=False):
