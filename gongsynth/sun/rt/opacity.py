@@ -24,6 +24,8 @@ ABO full width per perturber 2 (4/π)^{α/2} Γ(2 − α/2) v₀ σ (v̄/v₀)^{
 (v₀ = 10 km/s, v̄ the mean H–atom relative speed; Anstee & O'Mara 1995,
 Barklem, Piskunov & O'Mara 2000), times n_H I + 0.42 n_He as Barklem's
 recipe adds helium.  `line_constants` packs what the kernels need into one array.
+`tabulated_opacity` gives the same quantities from T and P_gas by interpolation in a
+per-line (ln T, ln P) table (`opacity_table`), the equation of state included.
 """
 from __future__ import annotations
 

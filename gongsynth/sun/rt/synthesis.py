@@ -2,9 +2,10 @@
 `synthesize`: LTE Stokes synthesis of a spectral line (Ni I 676.78 nm, Fe I 617.33 nm), Atmosphere → Stokes.
 
 Work is done in blocks of output rows (about `BLOCK_COLUMNS` rays at a time):
-sample every field along the block's rays (`~gongsynth.sun.rt.rays`), complete
-the thermodynamic state (`~gongsynth.sun.rt.eos`), compute opacities per point
-(`~gongsynth.sun.rt.opacity`), solve the transfer equation per ray and
+sample every field along the block's rays (`~gongsynth.sun.rt.rays`), compute
+the opacities per point (`~gongsynth.sun.rt.opacity`: from its (T, P) table
+for T and P atmospheres, else after completing the thermodynamic state with
+`~gongsynth.sun.rt.eos`), solve the transfer equation per ray and
 wavelength (`~gongsynth.sun.rt.kernels`) and take the truth
 (`~gongsynth.sun.rt.truth`).  Memory besides the output: ~20 float64 values
 per ray point of one block (~30 MB for 100 heights), never the whole opacity cube.
