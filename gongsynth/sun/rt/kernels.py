@@ -43,6 +43,7 @@ from gongsynth.sun.rt.voigt import (
     TABLE_YMAX,
     faddeeva,
     faddeeva_fast,
+    sigma_taylor_vec,
     w_region1,
     w_region2,
     w_table,
@@ -335,57 +336,6 @@ def _w_vec(dl, rd, shift, y, xs, wr, wi):
         wr[j], wi[j] = w_region1(xs[j], y)
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath=_CONTRACT)
-def _sigma_vec(xs, y, vb, hp, fp, hs, fs, hd, fd, work):
-    """
-    σ profiles of all wavelengths from the π ones by `~gongsynth.sun.rt.voigt.sigma_taylor`'s series.
-
-    vb ≤ `VB_TAYLOR`; the same recurrence, order by order over all wavelengths (loops the compiler
-    vectorises), up to the first order N whose term's bound (1.4 vb)^N/√(N!) is below 1e-9, at most 7
-    (`sigma_taylor`'s): N ≤ 4 below vb = 0.006, 5 below 0.018, 6 below 0.039.  In the wings too: the
-    recurrence's error there stays below W4's own, < 4e-5 of the peak for vb ≤ 0.15.  ``work``: (4, nλ)
-    scratch.
-    """
-    nl = xs.size
-    order = 1
-    bound = 1.4 * vb
-    while order < 7 and bound > 1e-9:
-        order += 1
-        bound *= 1.4 * vb / math.sqrt(order)
-    d0r, d0i, d1r, d1i = work[0], work[1], work[2], work[3]
-    for j in range(nl):
-        zr = -2.0 * xs[j]
-        d0r[j] = hp[j]
-        d0i[j] = fp[j]
-        d1r[j] = zr * hp[j] + 2.0 * y * fp[j]
-        d1i[j] = zr * fp[j] - 2.0 * y * hp[j] + 1.1283791670955126
-        hs[j] = hp[j]
-        fs[j] = fp[j]
-        hd[j] = vb * d1r[j]
-        fd[j] = vb * d1i[j]
-    c = vb
-    for n in range(1, order):
-        c *= vb * (1.0 / (n + 1))
-        even = n % 2 == 1
-        for j in range(nl):
-            zr = -2.0 * xs[j]
-            d2r = zr * d1r[j] + 2.0 * y * d1i[j] - 2.0 * n * d0r[j]
-            d2i = zr * d1i[j] - 2.0 * y * d1r[j] - 2.0 * n * d0i[j]
-            d0r[j] = d1r[j]
-            d0i[j] = d1i[j]
-            d1r[j] = d2r
-            d1i[j] = d2i
-            if even:
-                hs[j] += c * d2r
-                fs[j] += c * d2i
-            else:
-                hd[j] += c * d2r
-                fd[j] += c * d2i
-    for j in range(nl):
-        hd[j] *= -2.0
-        fd[j] *= -2.0
-
-
 _EXP2_NEG = np.ldexp(1.0, -np.arange(1080))          # 2⁻ⁿ
 _EXP_TAYLOR = np.array([(-1.0) ** n / math.factorial(n) for n in range(16)])
 
@@ -535,7 +485,7 @@ def _solve_ray(dl, lam0, lande_g, core_index, ds, kc, kl, dop_k, aa, bb, vlos, b
     i0, i1, i2, i3, pr0, pr1 = wk[0], wk[1], wk[2], wk[3], wk[4], wk[5]
     pr2, pr3, pr4, pr5, dt, ex = wk[6], wk[7], wk[8], wk[9], wk[10], wk[11]
     xs, xb, wbr, wbi = wk[12], wk[13], wk[14], wk[15]
-    sw = np.empty((4, nl))        # scratch of _sigma_vec
+    sw = np.empty((4, nl))        # scratch of sigma_taylor_vec
     eu = np.empty((7, nl))        # elements at the point below
     ec = np.empty((7, nl))        # and at the current point
     k = kbot
@@ -574,7 +524,7 @@ def _solve_ray(dl, lam0, lande_g, core_index, ds, kc, kl, dop_k, aa, bb, vlos, b
                 pr4[j] = 0.0
                 pr5[j] = 0.0
         elif vb <= VB_TAYLOR and ak <= TABLE_YMAX:
-            _sigma_vec(xs, ak, vb, pr0, pr1, pr2, pr3, pr4, pr5, sw)
+            sigma_taylor_vec(xs, ak, vb, pr0, pr1, pr2, pr3, pr4, pr5, sw)
         else:
             _w_vec(dl, rd, vs - vb, ak, xb, pr2, pr3)            # w(x + vb)
             _w_vec(dl, rd, vs + vb, ak, xb, wbr, wbi)            # w(x − vb)
