@@ -126,7 +126,7 @@ def peak_flops_per_ns():
 class StageClock:
     """CPU seconds spent in each of `synthesize`'s stage functions (patched in `synthesis` while active)."""
 
-    NAMES = ("_state", "column_opacity", "solve_columns", "sample_component", "los_field_at_depth",
+    NAMES = ("_opacity", "solve_columns", "sample_component", "los_field_at_depth",
              "reference_height")
 
     def __init__(self):

@@ -1,5 +1,6 @@
-"""The fast paths of gongsynth.rt (tabulated Faddeeva, sigma by Taylor series, scalar B = 0 solve, vectorised
-4x4 step) against the simple reference solver kept in gongsynth.sun.rt.kernels, recomputed in the same run."""
+"""The fast paths of gongsynth.rt (tabulated opacity, tabulated Faddeeva, sigma by Taylor series, scalar B = 0
+solve, vectorised 4x4 step) against the simple reference solver kept in gongsynth.sun.rt.kernels and the
+direct opacity, recomputed in the same run."""
 from pathlib import Path
 
 import astropy.units as u
@@ -163,28 +164,68 @@ def test_fast_solver_refuses_a_decreasing_wavelength_grid():
         solve_columns(*args, *out)
 
 
-def test_3d_sun_fast_path_matches_the_reference_and_any_thread_count(monkeypatch):
-    """The default run's kind of input (T and P only: the equation of state runs; granulation, network
-    elements, a weak internetwork field): the fast electron density and solver against the reference ones
-    within 1e-4 Ic, and the same bits with one thread as with all."""
+def _direct_opacity(temp, pressure, vturb, const, pf, *out):
+    """The reference for `tabulated_opacity`: the state solved per point, then `column_opacity`."""
+    from gongsynth.sun.rt.eos import solve_state
+    from gongsynth.sun.rt.opacity import column_opacity
+
+    st = solve_state(temp, gas_pressure=pressure)
+    column_opacity(temp, st["electron_density"], st["hydrogen_density"], vturb, const, pf, *out)
+
+
+@pytest.mark.parametrize("line", ["Ni I 676.8", "Fe I 617.3"])
+def test_opacity_table_matches_the_direct_calculation(line):
+    """The (ln T, ln P) table within 1e-5 of every quantity over its range (the 3-D Sun's 3400-14 000 K,
+    0.3-2.4e6 dyn/cm2 and MURaM's 2600 K, 0.01 dyn/cm2 inside it), on and beside the partition functions'
+    nodes (the kinks it must not interpolate across); outside the table the direct path, bit for bit."""
+    from gongsynth.sun.rt.atomic_data import PF_TEMPERATURE
+    from gongsynth.sun.rt.opacity import _PF_LNT, line_constants, tabulated_opacity
+
+    const, pf = line_constants(line)
+    rng = np.random.default_rng(7)
+    kinks = np.concatenate([PF_TEMPERATURE, np.exp(_PF_LNT[::7])])
+    t = np.concatenate([np.exp(rng.uniform(np.log(2000), np.log(20000), 6000)), kinks, kinks * (1 + 1e-9),
+                        kinks * (1 - 1e-9), np.exp(rng.uniform(np.log(500), np.log(1e5), 1000))])
+    p = np.exp(rng.uniform(np.log(1e-2), np.log(1e7), t.size))
+    p[-1000:] = np.exp(rng.uniform(np.log(1e-4), np.log(1e9), 1000))
+    t, p = t[p / (1.380649e-16 * t) > 2e3], p[p / (1.380649e-16 * t) > 2e3]          # a gas, not vacuum
+    t, p = t.reshape(1, -1), p.reshape(1, -1)
+    vt = rng.uniform(0, 2e5, t.shape)
+    fast, ref = np.empty((2, 5) + t.shape)
+    tabulated_opacity(t, p, vt, const, pf, *fast)
+    _direct_opacity(t, p, vt, const, pf, *ref)
+    inside = (t >= 2000) & (t < 20000) & (p >= 1e-2) & (p < 1e7)
+    outside = (t < 1900) | (t > 21000) | (p < 0.8e-2) | (p > 2e7)      # the table's edge nodes
+    assert inside.sum() > 6000 and outside.sum() > 500
+    assert np.abs(fast / ref - 1)[:, inside].max() < 1e-5
+    np.testing.assert_array_equal(fast[:, outside], ref[:, outside])
+
+
+@pytest.mark.parametrize("line", ["Ni I 676.8", "Fe I 617.3"])
+def test_3d_sun_fast_path_matches_the_reference_and_any_thread_count(monkeypatch, line):
+    """The default run's kind of input (T and P only: the tabulated opacity; granulation, network
+    elements, a weak internetwork field): the table and the fast solver against the reference electron
+    density, direct opacity and reference solver within 1e-4 Ic, and the same bits with one thread as
+    with all."""
     from gongsynth.sun.model_atmosphere import model_atmosphere
     from gongsynth.sun.rt import eos
 
     atm = model_atmosphere((16, 16), 384 * u.km, seed=3, nz=40)
     assert atm.raw("electron_density") is None
-    fast = synthesize(atm, mu=0.7, azimuth=-90 * u.deg, progress=False, line="Fe I 617.3")
+    fast = synthesize(atm, mu=0.7, azimuth=-90 * u.deg, progress=False, line=line)
     threads = numba.get_num_threads()
     numba.set_num_threads(1)
     try:
-        one = synthesize(atm, mu=0.7, azimuth=-90 * u.deg, progress=False, line="Fe I 617.3")
+        one = synthesize(atm, mu=0.7, azimuth=-90 * u.deg, progress=False, line=line)
     finally:
         numba.set_num_threads(threads)
     for s in "IQUV":
         np.testing.assert_array_equal(getattr(fast, s).value, getattr(one, s).value)
     electron_density = eos.electron_density
     monkeypatch.setattr(eos, "electron_density", lambda *a, **k: electron_density(*a, reference=True, **k))
+    monkeypatch.setattr(synthesis, "tabulated_opacity", _direct_opacity)
     monkeypatch.setattr(synthesis, "solve_columns", solve_columns_reference)
-    ref = synthesize(atm, mu=0.7, azimuth=-90 * u.deg, progress=False, line="Fe I 617.3")
+    ref = synthesize(atm, mu=0.7, azimuth=-90 * u.deg, progress=False, line=line)
     ic = ref.I.value[:, :, :1].min()
     assert np.abs(ref.V.value).max() > 1e-3 * ic                          # a field to compare
     for s in "IQUV":

@@ -27,7 +27,7 @@ advances all wavelengths together point by point in loops the compiler
 vectorises, takes w(z) in W4's regions as contiguous runs of wavelengths
 (`_w_vec`: a Taylor table where Humlíček's W4 is slow, more accurate than W4
 there), the σ profiles from the Taylor series in the Zeeman shift when it is
-below `VB_TAYLOR` Doppler widths, and the scalar solve on rays with B = 0; its
+below `VB_TAYLOR` Doppler widths (to the order the shift needs), and the scalar solve on rays with B = 0; its
 only fast-math flag is fused multiply-add, so it gives the same bits for any
 block size and thread count.  `solve_columns_reference` is the first, simple implementation of
 the same equations, kept to test and benchmark the fast one against.
@@ -43,7 +43,7 @@ from gongsynth.sun.rt.voigt import (
     TABLE_YMAX,
     faddeeva,
     faddeeva_fast,
-    sigma_taylor,
+    sigma_taylor_vec,
     w_region1,
     w_region2,
     w_table,
@@ -336,17 +336,6 @@ def _w_vec(dl, rd, shift, y, xs, wr, wi):
         wr[j], wi[j] = w_region1(xs[j], y)
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath=_CONTRACT)
-def _sigma_vec(xs, y, vb, hp, fp, hs, fs, hd, fd):
-    """
-    σ profiles of all wavelengths from the π ones by `~gongsynth.sun.rt.voigt.sigma_taylor`, vb ≤ `VB_TAYLOR`.
-
-    In the wings too: the recurrence's error there stays below W4's own, < 4e-5 of the peak for vb ≤ 0.15.
-    """
-    for j in range(xs.size):
-        hs[j], fs[j], hd[j], fd[j] = sigma_taylor(xs[j], y, vb, hp[j], fp[j])
-
-
 _EXP2_NEG = np.ldexp(1.0, -np.arange(1080))          # 2⁻ⁿ
 _EXP_TAYLOR = np.array([(-1.0) ** n / math.factorial(n) for n in range(16)])
 
@@ -496,6 +485,7 @@ def _solve_ray(dl, lam0, lande_g, core_index, ds, kc, kl, dop_k, aa, bb, vlos, b
     i0, i1, i2, i3, pr0, pr1 = wk[0], wk[1], wk[2], wk[3], wk[4], wk[5]
     pr2, pr3, pr4, pr5, dt, ex = wk[6], wk[7], wk[8], wk[9], wk[10], wk[11]
     xs, xb, wbr, wbi = wk[12], wk[13], wk[14], wk[15]
+    sw = np.empty((4, nl))        # scratch of sigma_taylor_vec
     eu = np.empty((7, nl))        # elements at the point below
     ec = np.empty((7, nl))        # and at the current point
     k = kbot
@@ -534,7 +524,7 @@ def _solve_ray(dl, lam0, lande_g, core_index, ds, kc, kl, dop_k, aa, bb, vlos, b
                 pr4[j] = 0.0
                 pr5[j] = 0.0
         elif vb <= VB_TAYLOR and ak <= TABLE_YMAX:
-            _sigma_vec(xs, ak, vb, pr0, pr1, pr2, pr3, pr4, pr5)
+            sigma_taylor_vec(xs, ak, vb, pr0, pr1, pr2, pr3, pr4, pr5, sw)
         else:
             _w_vec(dl, rd, vs - vb, ak, xb, pr2, pr3)            # w(x + vb)
             _w_vec(dl, rd, vs + vb, ak, xb, wbr, wbi)            # w(x − vb)

@@ -24,6 +24,8 @@ ABO full width per perturber 2 (4/π)^{α/2} Γ(2 − α/2) v₀ σ (v̄/v₀)^{
 (v₀ = 10 km/s, v̄ the mean H–atom relative speed; Anstee & O'Mara 1995,
 Barklem, Piskunov & O'Mara 2000), times n_H I + 0.42 n_He as Barklem's
 recipe adds helium.  `line_constants` packs what the kernels need into one array.
+`tabulated_opacity` gives the same quantities from T and P_gas by interpolation in a
+per-line (ln T, ln P) table (`opacity_table`), the equation of state included.
 """
 from __future__ import annotations
 
@@ -32,10 +34,12 @@ import math
 import numba as nb
 import numpy as np
 
-from gongsynth.sun.rt.atomic_data import ABUNDANCE, IONISATION_EV, get_line
+from gongsynth.sun.rt.atomic_data import ABUNDANCE, IONISATION_EV, PF_TEMPERATURE, get_line
+from gongsynth.sun.rt.eos import solve_state
 from gongsynth.threads import run_chunks
 
 __all__ = ["line_constants", "point_opacity", "column_opacity", "continuum_opacity", "line_opacity",
+           "opacity_table", "tabulated_opacity",
            "planck", "LC_SIZE"]
 
 _H = 6.62607015e-27
@@ -206,13 +210,18 @@ def point_opacity(t, ne, nh, vturb, const, pf_table):
     n_neutral = n_el * ne / (ne + phi)
     n_low = n_neutral * const[2] * math.exp(-const[3] / kt_ev - ln_u1)
     stim = -math.expm1(-_H * _C / (lam * _K * t))
-    dlam = lam / _C * math.sqrt(2.0 * _K * t / const[6] + vturb * vturb)
-    kl = const[1] * n_low * stim / (_SQRT_PI * dlam)
     lnt = math.log(t)
     gamma = const[7] + const[8] * math.exp(const[12] * lnt) * n_hi + const[9] * math.exp(lnt / 6.0) * ne
+    return _finish(t, vturb, const, kc, const[1] * n_low * stim / _SQRT_PI, gamma, planck(lam, t))
+
+
+@nb.njit(cache=True, inline="always")
+def _finish(t, vturb, const, kc, k_dl, gamma, source):
+    """`point_opacity`'s result from its microturbulence-free parts: κ_c, K = κ_L Δλ_D, Γ (s⁻¹), B_λ."""
+    lam = const[0]
+    dlam = lam / _C * math.sqrt(2.0 * _K * t / const[6] + vturb * vturb)
     dnu = _C * dlam / (lam * lam)
-    a = gamma / (4.0 * math.pi * dnu)
-    return kc, kl, dlam, a, planck(lam, t)
+    return kc, k_dl / dlam, dlam, gamma / (4.0 * math.pi * dnu), source
 
 
 def continuum_opacity(wavelength_nm, temperature, electron_density, hydrogen_density):
@@ -307,3 +316,162 @@ def _column_opacity_rows(start, stop, temp, ne, nh, vturb, const, pf_table, kc, 
         for k in range(nz):
             r = point_opacity(temp[p, k], ne[p, k], nh[p, k], vturb[p, k], const, pf_table)
             kc[p, k], kl[p, k], dop[p, k], damping[p, k], source[p, k] = r
+
+
+#: `tabulated_opacity`'s grid: ln T steps of at most 1/`_TAB_SUB` of the line's partition-function grid
+#: (`_PF_LNT`), with a node on each node of that grid and of the equation of state's partition functions
+#: (`PF_TEMPERATURE`), over `_TAB_T` K; ln P every `_TAB_DLNP` over `_TAB_P` dyn cm⁻².
+_TAB_SUB = 4
+_TAB_T = (2000.0, 20000.0)
+_TAB_P = (1e-2, 1e7)
+_TAB_DLNP = 0.15
+_TABLES = {}
+
+
+def _tab_temperature_grid():
+    """
+    `opacity_table`'s ln T nodes, each cell's cubic stencil and Lagrange denominators, and the lookup.
+
+    Between two kinks (a segment) the nodes are uniform, at least 4 of them; a cell's stencil is the 4
+    nodes of its own segment nearest to it.  ``cell[b]`` is the last node at or below the b-th point of
+    a uniform grid of step h (≤ every node spacing), from which the cell of any ln T is a few steps away.
+    """
+    h0 = _PF_LNT[1] - _PF_LNT[0]
+    lo, hi = math.log(_TAB_T[0]), math.log(_TAB_T[1])
+    kinks = np.union1d(_PF_LNT[(_PF_LNT > lo) & (_PF_LNT < hi)],
+                       np.log(PF_TEMPERATURE[(PF_TEMPERATURE > _TAB_T[0]) & (PF_TEMPERATURE < _TAB_T[1])]))
+    ends = np.concatenate([[lo], kinks[np.diff(np.concatenate([[lo], kinks])) > 1e-9], [hi]])
+    nodes, start = [], []
+    for s0, s1 in zip(ends[:-1], ends[1:]):
+        n = max(3, math.ceil((s1 - s0) / h0 * _TAB_SUB))
+        first = len(nodes)
+        nodes.extend(s0 + (s1 - s0) * np.arange(n) / n)
+        start.extend(min(max(first + c - 1, first), first + n - 3) for c in range(n))
+    nodes.append(hi)
+    nodes, start = np.array(nodes), np.array(start, dtype=np.int64)
+    st = nodes[start[:, None] + np.arange(4)]
+    den = np.ones((start.size, 4))
+    for m in range(4):
+        for n in range(4):
+            if n != m:
+                den[:, m] *= st[:, m] - st[:, n]
+    h = np.diff(nodes).min()
+    base = lo + h * np.arange(math.ceil((hi - lo) / h) + 1)
+    cell = np.minimum(np.searchsorted(nodes, base, side="right") - 1, start.size - 1).astype(np.int64)
+    return nodes, start, 1.0 / den, cell, lo, 1.0 / h
+
+
+def opacity_table(const, pf_table):
+    """
+    A line's `point_opacity` parts without microturbulence on a (ln T, ln P_gas) grid, built once per process.
+
+    The tabulated quantities (κ_c, κ_L Δλ_D, the damping rate Γ and B_λ, as logarithms) depend on the
+    state (T, P) only, through n_e of `~gongsynth.sun.rt.eos.electron_density`.  They are smooth
+    functions of ln T and ln P except at the nodes of the partition functions' piecewise-linear
+    interpolation, in ln T: the line's (`line_constants`) and the equation of state's
+    (`~gongsynth.sun.rt.atomic_data.PF_TEMPERATURE`).  The ln T grid has a node on each of them and
+    interpolates cubically (Lagrange) inside each smooth piece only; in ln P it is cubic too
+    (0.15 steps).  Interpolation error < 1e-5 of each quantity (tests/test_rt_speedpaths.py).
+
+    Parameters
+    ----------
+    const, pf_table : `numpy.ndarray`
+        From `line_constants`.
+
+    Returns
+    -------
+    tuple
+        The ln T grid of `_tab_temperature_grid`, (ln P₀, 1/Δ ln P, P nodes) and the (nT, nP, 4) table.
+    """
+    key = (const.tobytes(), pf_table.tobytes())
+    if key not in _TABLES:
+        tgrid = _tab_temperature_grid()
+        nodes = tgrid[0]
+        lnp = math.log(_TAB_P[0]) + _TAB_DLNP * np.arange(-1, math.ceil(math.log(_TAB_P[1] / _TAB_P[0])
+                                                                          / _TAB_DLNP) + 3)
+        t, p = (np.ascontiguousarray(a.reshape(1, -1)) for a in
+                np.meshgrid(np.exp(nodes), np.exp(lnp), indexing="ij"))
+        st = solve_state(t, gas_pressure=p)
+        out = np.empty((5,) + t.shape)
+        column_opacity(t, st["electron_density"], st["hydrogen_density"], np.zeros_like(t), const, pf_table,
+                       *out)
+        kc, kl, dlam, a, src = (x.reshape(nodes.size, lnp.size) for x in out)
+        tab = np.log(np.stack([kc, kl * dlam, a * 4.0 * math.pi * _C * dlam / (const[0] ** 2), src], axis=-1))
+        pgrid = np.array([lnp[0], 1.0 / _TAB_DLNP, lnp.size])
+        _TABLES[key] = tgrid + (pgrid, np.ascontiguousarray(tab))
+    return _TABLES[key]
+
+
+def tabulated_opacity(temp, pressure, vturb, const, pf_table, kc, kl, dop, damping, source):
+    """
+    `column_opacity` from T and P_gas by interpolation in `opacity_table` (direct outside the table).
+
+    The same quantities as `column_opacity` with n_e and n_H from
+    `~gongsynth.sun.rt.eos.solve_state` (T, P), within 1e-5 of each; points outside the
+    table's 2000–20 000 K, 10⁻²–10⁷ dyn cm⁻² are computed directly.
+
+    Parameters
+    ----------
+    temp, pressure, vturb : (ncol, nz) float64
+        K, dyn cm⁻², cm/s.
+    const, pf_table : `numpy.ndarray`
+        From `line_constants`.
+    kc, kl, dop, damping, source : (ncol, nz) float64
+        Output: κ_c, κ_L (cm⁻¹), Δλ_D (cm), a, B_λ.
+    """
+    miss = np.empty(temp.shape, dtype=np.bool_)
+    run_chunks(_tabulated_rows, temp.shape[0], temp, pressure, vturb, const, *opacity_table(const, pf_table),
+               kc, kl, dop, damping, source, miss)
+    if miss.any():
+        t, p = temp[miss].reshape(1, -1), pressure[miss].reshape(1, -1)
+        st = solve_state(t, gas_pressure=p)
+        out = np.empty((5,) + t.shape)
+        column_opacity(t, st["electron_density"], st["hydrogen_density"], vturb[miss].reshape(1, -1), const,
+                       pf_table, *out)
+        for dst, src in zip((kc, kl, dop, damping, source), out):
+            dst[miss] = src[0]
+
+
+@nb.njit(cache=True, nogil=True, error_model="numpy")
+def _tabulated_rows(start, stop, temp, pressure, vturb, const, nodes, stencil, inv_den, cell, lt0, inv_h,
+                    pgrid, tab, kc, kl, dop, damping, source, miss):
+    """Columns ``start`` to ``stop`` of `tabulated_opacity` (``miss`` marks the points outside the table)."""
+    lp0, inv_hp, npres = pgrid[0], pgrid[1], pgrid[2]
+    lt_hi = nodes[nodes.size - 1]
+    nz = temp.shape[1]
+    v = np.empty(4)
+    for p in range(start, stop):
+        for k in range(nz):
+            t = temp[p, k]
+            lt = math.log(t)
+            fp = (math.log(pressure[p, k]) - lp0) * inv_hp
+            out = not (lt0 <= lt < lt_hi and 1.0 <= fp < npres - 2.0)        # NaN too
+            miss[p, k] = out
+            if out:
+                continue
+            j = cell[int((lt - lt0) * inv_h)]
+            while lt >= nodes[j + 1]:
+                j += 1
+            s = stencil[j]
+            d0, d1, d2, d3 = lt - nodes[s], lt - nodes[s + 1], lt - nodes[s + 2], lt - nodes[s + 3]
+            t0 = d1 * d2 * d3 * inv_den[j, 0]
+            t1 = d0 * d2 * d3 * inv_den[j, 1]
+            t2 = d0 * d1 * d3 * inv_den[j, 2]
+            t3 = d0 * d1 * d2 * inv_den[j, 3]
+            i = int(fp)
+            w = fp - i
+            # Cubic Lagrange weights of the pressure nodes i - 1 .. i + 2.
+            wa = w * (w - 1.0)
+            wb = (w + 1.0) * (w - 2.0)
+            c0 = -wa * (w - 2.0) * (1.0 / 6.0)
+            c1 = wb * (w - 1.0) * 0.5
+            c2 = -wb * w * 0.5
+            c3 = wa * (w + 1.0) * (1.0 / 6.0)
+            for q in range(4):
+                acc = 0.0
+                for m, tm in ((0, t0), (1, t1), (2, t2), (3, t3)):
+                    acc += tm * (c0 * tab[s + m, i - 1, q] + c1 * tab[s + m, i, q] + c2 * tab[s + m, i + 1, q]
+                                 + c3 * tab[s + m, i + 2, q])
+                v[q] = math.exp(acc)
+            kc[p, k], kl[p, k], dop[p, k], damping[p, k], source[p, k] = _finish(t, vturb[p, k], const, v[0],
+                                                                                 v[1], v[2], v[3])

@@ -2,9 +2,10 @@
 `synthesize`: LTE Stokes synthesis of a spectral line (Ni I 676.78 nm, Fe I 617.33 nm), Atmosphere → Stokes.
 
 Work is done in blocks of output rows (about `BLOCK_COLUMNS` rays at a time):
-sample every field along the block's rays (`~gongsynth.sun.rt.rays`), complete
-the thermodynamic state (`~gongsynth.sun.rt.eos`), compute opacities per point
-(`~gongsynth.sun.rt.opacity`), solve the transfer equation per ray and
+sample every field along the block's rays (`~gongsynth.sun.rt.rays`), compute
+the opacities per point (`~gongsynth.sun.rt.opacity`: from its (T, P) table
+for T and P atmospheres, else after completing the thermodynamic state with
+`~gongsynth.sun.rt.eos`), solve the transfer equation per ray and
 wavelength (`~gongsynth.sun.rt.kernels`) and take the truth
 (`~gongsynth.sun.rt.truth`).  Memory besides the output: ~20 float64 values
 per ray point of one block (~30 MB for 100 heights), never the whole opacity cube.
@@ -18,7 +19,7 @@ from gongsynth.geometry import check_geometry, los_basis
 from gongsynth.sun.rt.atomic_data import get_line
 from gongsynth.sun.rt.eos import solve_state
 from gongsynth.sun.rt.kernels import solve_columns
-from gongsynth.sun.rt.opacity import column_opacity, continuum_opacity, line_constants
+from gongsynth.sun.rt.opacity import column_opacity, line_constants, tabulated_opacity
 from gongsynth.sun.rt.rays import ray_offsets, sample_rays
 from gongsynth.sun.rt.truth import los_field_at_depth, truth_definition
 from gongsynth.sun.stokes import RADIANCE_UNIT, StokesCube
@@ -64,14 +65,25 @@ def default_wavelength(line=None):
                        WINDOW_POINTS) * u.nm
 
 
-def _state(atm, sample, nz):
-    """Sampled (ncol, nz) T, n_e, n_H of a block."""
+def _opacity(atm, sample, vturb, const, pf):
+    """
+    (ncol, nz) κ_c, κ_L, Δλ_D, a, B_λ of a block's points (`~gongsynth.sun.rt.opacity.column_opacity`).
+
+    An atmosphere of T and P_gas only (the 3-D Sun) takes them from the (T, P) table of
+    `~gongsynth.sun.rt.opacity.tabulated_opacity`; with ρ or n_e the state is solved per point.
+    """
     temp = sample("temperature")
-    p = sample("gas_pressure") if atm.raw("gas_pressure") is not None else None
+    out = [np.empty(temp.shape) for _ in range(5)]
     rho = sample("density") if atm.raw("density") is not None else None
     ne = sample("electron_density") if atm.raw("electron_density") is not None else None
-    st = solve_state(temp, gas_pressure=p if rho is None else None, density=rho, electron_density_=ne)
-    return temp, np.ascontiguousarray(st["electron_density"]), np.ascontiguousarray(st["hydrogen_density"])
+    p = sample("gas_pressure") if atm.raw("gas_pressure") is not None and rho is None else None
+    if rho is None and ne is None and p is not None:
+        tabulated_opacity(temp, p, vturb, const, pf, *out)
+        return out
+    st = solve_state(temp, gas_pressure=p, density=rho, electron_density_=ne)
+    ne, nh = (np.ascontiguousarray(st[k]) for k in ("electron_density", "hydrogen_density"))
+    column_opacity(temp, ne, nh, vturb, const, pf, *out)
+    return out
 
 
 def reference_height(atmosphere, line=None, max_columns=4096):
@@ -103,8 +115,8 @@ def reference_height(atmosphere, line=None, max_columns=4096):
         sample_rays(atmosphere.raw(name), rows, zero, zero, out)
         return out.reshape(rows.size, nx, nz)[:, cols].reshape(-1, nz)
 
-    temp, ne, nh = _state(atmosphere, sample, nz)
-    k = continuum_opacity(line.wavelength_nm, temp, ne, nh)
+    const, pf = line_constants(line)
+    k = _opacity(atmosphere, sample, np.zeros((rows.size * cols.size, nz)), const, pf)[0]
     z = atmosphere.z.to_value(u.cm)
     seg = 0.5 * (k[:, 1:] + k[:, :-1]) * np.diff(z)
     tau = np.concatenate([np.cumsum(seg[:, ::-1], axis=1)[:, ::-1], np.zeros((k.shape[0], 1))], axis=1)
@@ -223,8 +235,7 @@ def synthesize(atmosphere, *, mu=1.0, azimuth=0 * u.deg, wavelength=None, truth=
             sample_rays(atmosphere.raw(name), rows, dx, dy, buf)
             return buf
 
-        temp, ne, nh = _state(atmosphere, sample, nz)
-        vturb = sample("microturbulence") * 1e5
+        opac = _opacity(atmosphere, sample, sample("microturbulence") * 1e5, const, pf)
         vel = atmosphere.raw("velocity")
         mag = atmosphere.raw("magnetic_field")
         comps = [sample_component(vel, c, rows, dx, dy, ncol, nz) for c in range(3)]
@@ -234,9 +245,6 @@ def synthesize(atmosphere, *, mu=1.0, azimuth=0 * u.deg, wavelength=None, truth=
         b1 = comps[0] * e1[0] + comps[1] * e1[1] + comps[2] * e1[2]
         b2 = comps[0] * e2[0] + comps[1] * e2[1] + comps[2] * e2[2]
         del comps
-        opac = [np.empty((ncol, nz)) for _ in range(5)]
-        column_opacity(temp, ne, nh, vturb, const, pf, *opac)
-        del temp, ne, nh, vturb
         res = [np.empty((ncol, lam_cm.size), dtype=np.float32) for _ in range(4)]
         log_tc = np.empty((ncol, nz), dtype=np.float32)
         log_tl = np.empty((ncol, nz), dtype=np.float32)
