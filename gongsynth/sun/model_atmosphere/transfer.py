@@ -15,9 +15,7 @@ same bits.
 """
 from __future__ import annotations
 
-import contextlib
 import math
-import threading
 
 import astropy.units as u
 import numpy as np
@@ -33,27 +31,6 @@ __all__ = ["DeferredTransfer"]
 
 # `reference_height`'s default sample of the box (`gongsynth.sun.rt.synthesis`).
 _REFERENCE_COLUMNS = 4096
-
-
-_ANCHOR_LOCK = threading.Lock()
-
-
-@contextlib.contextmanager
-def _anchored(box, z_ref):
-    """`rt.synthesize` of the block ``box`` takes the whole box's reference height, not its own."""
-    # rt.synthesize has no argument for it (a keyword there would replace this, see the changelog);
-    # any other atmosphere, from another thread too, still gets its own.
-    with _ANCHOR_LOCK:
-        found = rt_synthesis.reference_height
-
-        def anchored(atmosphere, line=None, max_columns=_REFERENCE_COLUMNS):
-            return z_ref if atmosphere is box else found(atmosphere, line, max_columns)
-
-        rt_synthesis.reference_height = anchored
-        try:
-            yield
-        finally:
-            rt_synthesis.reference_height = found
 
 
 class DeferredTransfer(DeferredCube):
@@ -205,9 +182,8 @@ class DeferredTransfer(DeferredCube):
             else:
                 box = self._sun.rows(np.arange(start - below, rows.stop + above))
                 keep = slice(below, below + n)
-            with _anchored(box, z_ref):
-                cube = rt_synthesis.synthesize(box, mu=self._mu, azimuth=self._azimuth, line=self._line,
-                                               progress=False)
+            cube = rt_synthesis.synthesize(box, mu=self._mu, azimuth=self._azimuth, line=self._line,
+                                           progress=False, anchor_height=z_ref * u.km)
             del box
             part = cube[keep]
             blos[rows] = part.blos.to_value(u.G)

@@ -132,7 +132,7 @@ def reference_height(atmosphere, line=None, max_columns=4096):
 
 @u.quantity_input(azimuth=u.deg)
 def synthesize(atmosphere, *, mu=1.0, azimuth=0 * u.deg, wavelength=None, truth="paper", progress=True,
-               line=None, rays="inclined"):
+               line=None, rays="inclined", anchor_height=None):
     """
     Polarised LTE synthesis of a spectral line along (inclined) rays through an Atmosphere.
 
@@ -170,6 +170,11 @@ def synthesize(atmosphere, *, mu=1.0, azimuth=0 * u.deg, wavelength=None, truth=
         approximation: path lengths dz/μ and the field projected on the line
         of sight as before, but no crossing of neighbouring structure) — an
         ablation, to measure what the inclined rays do.
+    anchor_height : `~astropy.units.Quantity`, optional
+        Height where the inclined rays cross their pixel centres (default:
+        `reference_height` of this atmosphere, the mean τ_c = 1 height).  A
+        block of a larger box passes the whole box's, so that its rays sample
+        the same points as in the whole box.
 
     Returns
     -------
@@ -211,7 +216,14 @@ def synthesize(atmosphere, *, mu=1.0, azimuth=0 * u.deg, wavelength=None, truth=
     nz, ny, nx = atmosphere.shape
     z_km = atmosphere.z.to_value(u.km)
     inclined = mu_value < 1 and rays == "inclined"
-    z_ref = reference_height(atmosphere, line) if inclined else float("nan")
+    if not inclined:
+        z_ref = float("nan")
+    elif anchor_height is None:
+        z_ref = reference_height(atmosphere, line)
+    else:
+        z_ref = u.Quantity(anchor_height).to_value(u.km)
+        if not np.isfinite(z_ref):
+            raise ValueError(f"anchor_height must be a finite length, got {anchor_height}")
     dx, dy = ray_offsets(z_km, z_ref if inclined else 0.0, mu_value if inclined else 1.0, az,
                          atmosphere.pixel_size.to_value(u.km))
     ds = np.diff(z_km) * 1e5 / mu_value
