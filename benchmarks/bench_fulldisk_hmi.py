@@ -24,7 +24,7 @@ CODE = textwrap.dedent("""
     import json, sys, threading, time
     start = time.perf_counter()
     import astropy.units as u, gongsynth
-    stage, peak = ["import"], {}
+    stage, peak, stage_cpu = ["import"], {}, {}
 
     def watch():
         while True:
@@ -35,9 +35,13 @@ CODE = textwrap.dedent("""
     import gongsynth.chain
     run_stage = gongsynth.chain.Stage.__call__
 
-    def named(self, state):     # the stage now running, for the sampler
+    def named(self, state):     # the stage now running, for the sampler; its CPU time (both cores)
         stage[0] = self.name
-        return run_stage(self, state)
+        begin = time.process_time()
+        try:
+            return run_stage(self, state)
+        finally:
+            stage_cpu[self.name] = stage_cpu.get(self.name, 0.0) + time.process_time() - begin
 
     gongsynth.chain.Stage.__call__ = named
     threading.Thread(target=watch, daemon=True).start()
@@ -46,7 +50,9 @@ CODE = textwrap.dedent("""
                                 obstime="2010-10-20T00:00", sun=sys.argv[1], detector_shape=int(sys.argv[2]),
                                 progress=False)
     stage[0] = "save"
+    begin = time.process_time()
     result.save(sys.argv[3], overwrite=True)
+    stage_cpu["save"] = time.process_time() - begin
     hwm = int([x for x in open("/proc/self/status") if x.startswith("VmHWM")][0].split()[1]) / 2**20
     wall, cpu = time.perf_counter() - start, time.process_time() - cpu
     # Plain baselines in the same process: one real FFT of a supersampled plane (the optics' unit of
@@ -60,6 +66,7 @@ CODE = textwrap.dedent("""
     stack_GB = result.expected_counts.shape[0] * int(sys.argv[2])**2 * 8 / 2**30
     print(json.dumps({"wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
                       "stages_s": {k: round(v, 1) for k, v in result.timings.items()},
+                      "stage_cpu_s": {k: round(v, 1) for k, v in stage_cpu.items()},
                       "peak_GB": round(hwm, 2), "stage_peak_GB": {k: round(v, 2) for k, v in peak.items()},
                       "baseline_fft_s": round(fft_s, 2), "wall_per_fft": round(wall / fft_s, 1),
                       "float64_stack_GB": round(stack_GB, 2), "peak_per_stack": round(hwm / stack_GB, 2)}))
@@ -83,7 +90,7 @@ def main():
         cache = os.environ.get("GONGSYNTH_CACHE_DIR", tmp) if args.cached_only else tmp
         for label in (() if args.cached_only else ("empty cache",)) + ("cached library",):
             numbers = run(args.sun, args.shape, cache, os.path.join(tmp, "out"))
-            print(f"{label:15s} load {os.getloadavg()[0]:.1f}: {json.dumps(numbers)}")
+            print(f"{label:15s} load {os.getloadavg()[0]:.1f}: {json.dumps(numbers)}", flush=True)
 
 
 if __name__ == "__main__":

@@ -540,4 +540,4 @@ def _blank(image, sky):
     if image is None:
         return None
     image = u.Quantity(image)
-    return np.where(sky, np.nan, image.value) * image.unit
+    return u.Quantity(np.where(sky, np.nan, image.value), image.unit, copy=False)   # one 4096² copy, not two

@@ -21,6 +21,9 @@ _LINEAR_FIELD = 20.0
 _MIN_FIELD = 150.0
 # Dopplergram full scale (m/s).
 _DOPPLER_LIMIT = 1500.0
+# The most pixels a panel's image keeps along an axis: a map drawn at ~350 pixels gains nothing from
+# more, and a 4096² map through matplotlib's resampling costs seconds and copies of itself in float64.
+_DISPLAY_PIXELS = 1024
 
 
 def _nice_ceiling(value):
@@ -97,6 +100,35 @@ def _panels(result):
 def _finite(smap):
     data = np.asarray(smap.data, dtype=float)
     return data[np.isfinite(data)]
+
+
+def _display(data, extent):
+    """
+    The image a panel draws and its extent: ``data`` averaged over blocks of f × f pixels (NaN
+    ignored; a block of NaN stays NaN), f the smallest factor that brings both axes to at most
+    `_DISPLAY_PIXELS`, the rows and columns beyond the last whole block left out of the extent too.
+
+    Examples
+    --------
+    >>> data = np.ones((2050, 2050))
+    >>> data[:3, :3] = np.nan                   # one whole block of sky
+    >>> image, extent = _display(data, (0.0, 2050.0, 0.0, 2050.0))
+    >>> image.shape, extent, bool(np.isnan(image[0, 0])), float(image[1, 1])
+    ((683, 683), (0.0, 2049.0, 0.0, 2049.0), True, 1.0)
+    """
+    ny, nx = data.shape
+    f = -(-max(ny, nx) // _DISPLAY_PIXELS)
+    if f == 1:
+        return data, extent
+    my, mx = ny // f, nx // f
+    blocks = np.asarray(data[:my * f, :mx * f]).reshape(my, f, mx, f)
+    finite = np.isfinite(blocks)
+    total = np.where(finite, blocks, 0).sum(axis=(1, 3), dtype=np.float64)
+    count = finite.sum(axis=(1, 3))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        image = (total / count).astype(np.float32)
+    left, right, bottom, top = extent
+    return image, (left, left + (right - left) * mx * f / nx, bottom, bottom + (top - bottom) * my * f / ny)
 
 
 def _field_ticks(limit):
@@ -242,7 +274,8 @@ def quicklook_figure(result):
     extent = _sky_extent(result.magnetogram)
     for i, (title, smap, norm, extend) in enumerate(panels):
         ax = fig.add_axes(_rect(fig, i, ncols, nrows, _MAP))
-        image = ax.imshow(smap.data, origin="lower", extent=extent, cmap=smap.cmap, norm=norm,
+        shown, shown_extent = _display(smap.data, extent)
+        image = ax.imshow(shown, origin="lower", extent=shown_extent, cmap=smap.cmap, norm=norm,
                           interpolation="antialiased")
         ax.set_title(title, fontsize=10)
         ax.set_xlabel("Solar X [arcsec]", fontsize=8)

@@ -53,15 +53,18 @@ def _bracket(nodes, x):
 
 
 @nb.njit(cache=True, inline="always")
-def _bilinear(grid, lon0, lat0, step, lon, lat):
-    """Bilinear value of a (nlat, nlon) grid at (lon, lat) in deg; clamped at the edges."""
-    nlat, nlon = grid.shape
+def _bilinear2(first, second, lon0, lat0, step, lon, lat):
+    """Bilinear values of two (nlat, nlon) grids on one lattice at (lon, lat) in deg; clamped at the edges."""
+    nlat, nlon = first.shape
     x = min(max((lon - lon0) / step, 0.0), nlon - 1.000001)
     y = min(max((lat - lat0) / step, 0.0), nlat - 1.000001)
     i, j = np.int64(y), np.int64(x)
     fy, fx = y - i, x - j
-    return ((1 - fy) * ((1 - fx) * grid[i, j] + fx * grid[i, j + 1])
-            + fy * ((1 - fx) * grid[i + 1, j] + fx * grid[i + 1, j + 1]))
+    a = ((1 - fy) * ((1 - fx) * first[i, j] + fx * first[i, j + 1])
+         + fy * ((1 - fx) * first[i + 1, j] + fx * first[i + 1, j + 1]))
+    b = ((1 - fy) * ((1 - fx) * second[i, j] + fx * second[i, j + 1])
+         + fy * ((1 - fx) * second[i + 1, j] + fx * second[i + 1, j + 1]))
+    return a, b
 
 
 def cell_table(radius, cell_km, distance, b0):
@@ -186,11 +189,18 @@ def render_disk(light, truth, h, x0, y0, distance, b0, radius,
     size_y, size_x = ny * pixel_km, nx * pixel_km
     cb, sb = math.cos(b0), math.sin(b0)
     counts = np.zeros((n_rows, 2), dtype=np.int64)
+    basis_t = np.empty((n_v, j * n_c))     # the amplitudes with the filtergram index last
+    for kv in range(n_v):
+        for qq in range(j):
+            for c in range(n_c):
+                basis_t[kv, qq * n_c + c] = amplitudes[kv, c, qq]
     for band_row in nb.prange(n_rows):
         row = row0 + band_row
         acc = np.empty(k_row)
-        amp = np.empty((n_c, j))
         tot = np.empty(n_c)
+        amp_t = np.empty(j * n_c)
+        spec = np.empty(j1)
+        val = np.empty(2 * n_c)
         y = y0 + (row - (big_y - 1) / 2) * h
         for col in range(big_x):
             x = x0 + (col - (big_x - 1) / 2) * h
@@ -214,8 +224,7 @@ def render_disk(light, truth, h, x0, y0, distance, b0, radius,
             for k in range(k_row):
                 acc[k] = 0.0
             lon_d, lat_d = math.degrees(lon), math.degrees(b)
-            m = _bilinear(field, grid_lon0, grid_lat0, grid_step, lon_d, lat_d)
-            vel = _bilinear(velocity, grid_lon0, grid_lat0, grid_step, lon_d, lat_d)
+            m, vel = _bilinear2(field, velocity, grid_lon0, grid_lat0, grid_step, lon_d, lat_d)
             sign = 1.0 if m >= 0 else -1.0
             level0, wl = _bracket(level_net, abs(m))
             if abs(m) >= level_net[n_levels - 1]:
@@ -285,20 +294,25 @@ def render_disk(light, truth, h, x0, y0, distance, b0, radius,
                 continue
             kv = min(np.int64(xv), n_v - 2)
             fv = xv - kv
+            # The basis at the sample's velocity, then every output plane's sum in the basis' order
+            # (the same bits as one sum per plane), the planes' sums side by side: short loops over
+            # contiguous memory that the compiler vectorises.
             for c in range(n_c):
                 tot[c] = (1.0 - fv) * totals[kv, c] + fv * totals[kv + 1, c]
-                for qq in range(j):
-                    amp[c, qq] = (1.0 - fv) * amplitudes[kv, c, qq] + fv * amplitudes[kv + 1, c, qq]
-            scale = ld * to_earth
+            for k in range(j * n_c):
+                amp_t[k] = (1.0 - fv) * basis_t[kv, k] + fv * basis_t[kv + 1, k]
             for pol in range(2):
                 e0 = e_index[pol] * j1
                 vs = v_sign[pol]
+                for qq in range(j1):
+                    spec[qq] = acc[e0 + qq] + vs * acc[v_off + qq]
                 for c in range(n_c):
-                    out = pol * n_c + c - plane0
-                    if out < 0 or out >= n_out:
-                        continue
-                    val = (acc[e0] + vs * acc[v_off]) * tot[c]
-                    for qq in range(j):
-                        val += amp[c, qq] * (acc[e0 + 1 + qq] + vs * acc[v_off + 1 + qq])
-                    light[out, band_row, col] = scale * val
+                    val[pol * n_c + c] = spec[0] * tot[c]
+                for qq in range(j):
+                    sq = spec[qq + 1]
+                    for c in range(n_c):
+                        val[pol * n_c + c] += amp_t[qq * n_c + c] * sq
+            scale = ld * to_earth
+            for o in range(n_out):
+                light[o, band_row, col] = scale * val[plane0 + o]
     return counts[:, 0].sum(), counts[:, 1].sum()
