@@ -138,7 +138,7 @@ class Chain(list):
             raise KeyError(f"no stage named {key!r}; the chain has {self.names}")
         return super().__getitem__(key)
 
-    def run(self, state=None, *, until=None, progress=True, timings=None):
+    def run(self, state=None, *, until=None, progress=True, timings=None, keep=None):
         """
         Run the stages in order.
 
@@ -152,11 +152,15 @@ class Chain(list):
             Show a progress bar over the stages.
         timings : dict, optional
             Filled with each stage's wall-clock seconds.
+        keep : iterable of str, optional
+            Keep only these quantities to the end: any other is released as
+            soon as no later stage needs it (a full disk's 8192² truth scene,
+            for one).  Default: keep everything.
 
         Returns
         -------
         dict
-            The state: every quantity any stage made.
+            The state: every quantity any stage made (or those in ``keep``).
         """
         from tqdm.auto import tqdm
 
@@ -165,8 +169,11 @@ class Chain(list):
         # A bar on a terminal; plain one-line messages where the output is a log file.
         bar = tqdm(total=stop, disable=not (progress and interactive()), unit="stage", desc="gongsynth",
                    bar_format="{desc:<28s}{bar}| {n_fmt}/{total_fmt} [{elapsed}]")
+        stages = self[:stop]
+        # The last stage (index) that reads each quantity: after it, it may go.
+        last_use = {name: index for index, stage in enumerate(stages) for name in stage.inputs}
         try:
-            for number, stage in enumerate(self[:stop], 1):
+            for number, stage in enumerate(stages, 1):
                 bar.set_description_str(f"gongsynth: {stage.name}")
                 if progress and bar.disable:
                     log.info(f"gongsynth: stage {number}/{stop} {stage.name}: {stage.description}")
@@ -176,6 +183,9 @@ class Chain(list):
                 log.debug(f"gongsynth: stage {stage.name} took {seconds:.2f} s")
                 if timings is not None:
                     timings[stage.name] = seconds
+                if keep is not None:
+                    for name in [n for n in state if n not in keep and last_use.get(n, -1) < number]:
+                        del state[name]
                 bar.update(1)
         finally:
             bar.close()

@@ -26,6 +26,10 @@ from gongsynth.version import version as __version__
 __all__ = ["SimulationResult", "Sweep", "simulate", "simulate_many", "simulate_each", "check_scene",
            "record_input_file"]
 
+# What a SimulationResult is made of: the chain releases every other quantity once used.
+_RESULT_STATE = ("magnetogram_map", "doppler_map", "continuum_map", "truth_map", "truth_psf_map", "raw",
+                 "expected_counts", "light")
+
 @dataclass
 class SimulationResult:
     """
@@ -272,7 +276,7 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=None, engine="blocks",
     chain = build_chain(config, stokes=stokes, flat=flat, dark=dark, progress=progress,
                         surface_field=surface_field)
     timings = {}
-    state = chain.run(progress=progress, timings=timings)
+    state = chain.run(progress=progress, timings=timings, keep=_RESULT_STATE)
     return SimulationResult(
         magnetogram=state["magnetogram_map"], doppler=state["doppler_map"],
         continuum=state["continuum_map"], truth=state["truth_map"], truth_psf=state["truth_psf_map"],

@@ -9,7 +9,7 @@ from sunpy.coordinates import frames
 
 import gongsynth
 from gongsynth.analysis.calibration import calibration_curve, robust_slope
-from gongsynth.chain import build_chain
+from gongsynth.chain import Chain, Stage, build_chain
 from gongsynth.config import SimulationConfig
 from gongsynth.products.maps import GONGSynthMap
 
@@ -217,6 +217,32 @@ def test_the_chain_is_public_data(disk_centre):
     state = build_chain(disk_centre.config).run(until="optics", progress=False)
     state = build_chain(disk_centre.config)["camera"](state)
     assert np.array_equal(state["raw"].data, disk_centre.raw.data)
+
+
+def test_a_run_that_keeps_its_results_releases_the_rest_once_used():
+    released = []
+
+    class Tracked:
+        def __init__(self, name):
+            self.name = name
+
+        def __del__(self):
+            released.append(self.name)
+
+    seen = {}
+
+    def second(a):
+        seen["a at second"] = a.name
+        return {"b": Tracked("b")}
+
+    chain = Chain([Stage("first", (), ("a",), lambda: {"a": Tracked("a")}),
+                   Stage("second", ("a",), ("b",), second),
+                   Stage("third", ("b",), ("c",), lambda b: {"c": Tracked("c")}),
+                   Stage("fourth", ("c",), ("d",), lambda c: {"d": Tracked("d")})])
+    state = chain.run(progress=False, keep=("b", "d"))
+    assert seen == {"a at second": "a"} and sorted(state) == ["b", "d"]
+    assert released == ["a", "c"]   # each as soon as its last reader had run
+    assert sorted(chain.run(progress=False)) == ["a", "b", "c", "d"]   # default: everything kept
 
 
 def test_config_and_run_arguments_do_not_mix(disk_centre):
