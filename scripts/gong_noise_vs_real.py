@@ -10,7 +10,9 @@ the count levels of `gongsynth.analysis.count_levels`) and
 ``OUT/<name>_magnetogram.fits``::
 
     python scripts/gong_noise_vs_real.py --out OUT --name all-on
-    python scripts/gong_noise_vs_real.py --out OUT --name before --off frame_seeing minute_average
+    python scripts/gong_noise_vs_real.py --out OUT --name before \
+        --off frame_seeing minute_average image_rotation
+    python scripts/gong_noise_vs_real.py --out OUT --name bilinear --interpolant linear
 
 Takes about 2-4 minutes on two cores.
 """
@@ -33,6 +35,7 @@ def main(argv=None):
     parser.add_argument("--name", default="run")
     parser.add_argument("--off", nargs="*", default=[], help="effects to switch off")
     parser.add_argument("--effective-area", type=float, default=None, help="cm2 (default the instrument's)")
+    parser.add_argument("--interpolant", default=None, help="image_interpolant (default the instrument's)")
     parser.add_argument("--seed", type=int, default=1)
     args = parser.parse_args(argv)
 
@@ -50,8 +53,11 @@ def main(argv=None):
     instrument = instrument.replace(supersampling=3)
     if args.effective_area is not None:
         instrument = instrument.replace(effective_area=args.effective_area * u.cm**2)
+    if args.interpolant is not None:
+        instrument = instrument.replace(image_interpolant=args.interpolant)
     # GONG's real noise on (opt-in in gongsynth's defaults), then what the command line switches off.
-    effects = Effects(**{"frame_seeing": True, "minute_average": True, **dict.fromkeys(args.off, False)})
+    effects = Effects(**{"frame_seeing": True, "minute_average": True, "image_rotation": True,
+                         **dict.fromkeys(args.off, False)})
     config = SimulationConfig(mode="full-disk", duration=9 * u.min, seed=args.seed, surface_field="synthetic",
                               instrument=instrument, effects=effects, **settings)
     result = gongsynth.simulate(config=config, progress=False)
@@ -65,6 +71,8 @@ def main(argv=None):
                for key in table.colnames if key != "map"}
     levels = count_levels(gongsynth.load_observation(BIG_BEAR_INTENSITY, kind="continuum"), result)
     out = {"name": args.name, "effects_off": args.off, "effective_area_cm2": instrument.effective_area.value,
+           "image_interpolant": instrument.image_interpolant,
+           "image_rotation_angle_deg": instrument.image_rotation_angle.to_value(u.deg),
            "rows": list(table["map"]), "numbers": numbers,
            "power_ratio_5_100": stats.spectrum_ratio_range(),
            "power_ratio_5_100_matched": stats.spectrum_ratio_range(matched=True),

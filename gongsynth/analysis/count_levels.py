@@ -78,13 +78,11 @@ from astropy.table import QTable
 
 from gongsynth import instruments
 from gongsynth.analysis.disk import disk_coordinates
+from gongsynth.instruments.gong.header_counts import DIODE_KEYWORDS
 from gongsynth.instruments.gong.planes import N_CHANNELS, N_PLANES
 from gongsynth.stages.reduction import divide_flat, subtract_dark
 
 __all__ = ["DIODE_KEYWORDS", "PHASE_PLANES", "RealCountLevels", "real_count_levels", "count_levels"]
-
-#: The header keywords of the three phase planes' diode sums.
-DIODE_KEYWORDS = ("DIODE1", "DIODE2", "DIODE3")
 
 #: Accepted readings of the intensity image: the sum over 3 phase planes
 #: (each the mean of I+V and I-V, the default) or over all 6 planes.
