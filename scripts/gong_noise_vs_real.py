@@ -35,6 +35,8 @@ def main(argv=None):
     parser.add_argument("--name", default="run")
     parser.add_argument("--off", nargs="*", default=[], help="effects to switch off")
     parser.add_argument("--effective-area", type=float, default=None, help="cm2 (default the instrument's)")
+    parser.add_argument("--like-counts", action="store_true",
+                        help="the file's count level (like_counts: its DIODE sums) instead of an area")
     parser.add_argument("--interpolant", default=None, help="image_interpolant (default the instrument's)")
     parser.add_argument("--seed", type=int, default=1)
     args = parser.parse_args(argv)
@@ -59,7 +61,8 @@ def main(argv=None):
     effects = Effects(**{"frame_seeing": True, "minute_average": True, "image_rotation": True,
                          **dict.fromkeys(args.off, False)})
     config = SimulationConfig(mode="full-disk", duration=9 * u.min, seed=args.seed, surface_field="synthetic",
-                              instrument=instrument, effects=effects, **settings)
+                              instrument=instrument, effects=effects, like_counts=args.like_counts,
+                              **settings)
     result = gongsynth.simulate(config=config, progress=False)
     args.out.mkdir(parents=True, exist_ok=True)
     result.magnetogram.save(args.out / f"{args.name}_magnetogram.fits", overwrite=True)
@@ -71,7 +74,8 @@ def main(argv=None):
                for key in table.colnames if key != "map"}
     levels = count_levels(gongsynth.load_observation(BIG_BEAR_INTENSITY, kind="continuum"), result)
     out = {"name": args.name, "effects_off": args.off, "effective_area_cm2": instrument.effective_area.value,
-           "image_interpolant": instrument.image_interpolant,
+           "image_interpolant": instrument.image_interpolant, "like_counts": args.like_counts,
+           "effarea_header": result.raw.header.get("EFFAREA"),
            "image_rotation_angle_deg": instrument.image_rotation_angle.to_value(u.deg),
            "rows": list(table["map"]), "numbers": numbers,
            "power_ratio_5_100": stats.spectrum_ratio_range(),

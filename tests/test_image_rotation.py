@@ -105,13 +105,15 @@ def test_like_takes_the_rotator_angle():
 def test_count_scale_matches_the_diode_sums():
     inst = GONGInstrument()
     rng = np.random.default_rng(2)
-    expected = rng.uniform(0, 2e4, (6, 20, 20)) * u.electron
+    expected = np.pad(rng.uniform(0, 2e4, (6, 20, 20)), ((0, 0), (1, 1), (1, 1))) * u.electron
     per_plane = expected.to_value(u.electron).sum(axis=(1, 2)) / 33.0
     diodes = 0.5 * (per_plane[:3] + per_plane[3:]) * 0.2          # a real level 5 times lower
     header = {f"DIODE{k + 1}": d for k, d in enumerate(diodes)}
     assert count_scale(expected, header, inst) == pytest.approx(0.2, rel=1e-12)
     with pytest.raises(ValueError, match="DIODE"):
         header_diodes({"DIODE1": 1.0, "DIODE2": 2.0})
+    with pytest.raises(ValueError, match="wholly"):
+        count_scale(np.ones((6, 5, 5)) * u.electron, header, inst)
 
 
 def test_like_counts_needs_a_gong_full_disk_like_run():
@@ -119,3 +121,10 @@ def test_like_counts_needs_a_gong_full_disk_like_run():
         SimulationConfig(like_counts=True)
     with pytest.raises(TypeError, match="like_counts"):
         SimulationConfig(like_counts="yes")
+
+
+def test_cli_like_counts_without_like_exits_2(tmp_path, capsys):
+    from gongsynth.cli import main
+
+    assert main(["simulate", "--like-counts", "--out", str(tmp_path / "o")]) == 2
+    assert "like_counts" in capsys.readouterr().err

@@ -83,18 +83,27 @@ def count_scale(expected, header, instrument):
     float
         mean(DIODE) / Σ_pixels mean_planes(expected) / gain.
 
+    Raises
+    ------
+    ValueError
+        If the detector's edge is not dark sky (the disk is not wholly on it)
+        or a DIODE keyword is missing.
+
     Examples
     --------
     >>> import numpy as np, astropy.units as u
     >>> from gongsynth import GONGInstrument
     >>> inst = GONGInstrument()
-    >>> expected = np.full((6, 10, 10), 33.0 * 4) * u.electron     # 4 adu per pixel and frame
+    >>> expected = np.zeros((6, 12, 12)) * u.electron
+    >>> expected[:, 1:-1, 1:-1] = 33.0 * 4 * u.electron     # 4 adu per pixel and frame on 100 pixels
     >>> round(count_scale(expected, {"DIODE1": 100, "DIODE2": 100, "DIODE3": 100}, inst), 3)
     0.25
     """
+    counts = np.mean(u.Quantity(expected).to_value(u.electron), axis=0)
+    edge = np.concatenate([counts[0], counts[-1], counts[:, 0], counts[:, -1]])
+    if not np.max(counts) > 0 or np.mean(edge) > 0.01 * np.max(counts):
+        raise ValueError("the header's DIODE sums hold the whole disk: the simulated disk must lie wholly "
+                         "on the detector with dark sky at its edges (a full-disk run)")
     real = float(np.mean(header_diodes(header).to_value(u.adu)))
     gain = instrument.gain.to_value(u.electron / u.adu)
-    simulated = float(np.sum(np.mean(u.Quantity(expected).to_value(u.electron), axis=0))) / gain
-    if not simulated > 0:
-        raise ValueError("the simulation's expected counts sum to zero: no disk to scale to the header level")
-    return real / simulated
+    return float(real / (np.sum(counts) / gain))
