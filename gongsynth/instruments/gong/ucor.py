@@ -35,8 +35,10 @@ header; the detector's centre stands for it.
 expected counts by −θ onto the camera's grid (`to_camera`: an approximation
 of rendering the optics on rotated pixels, done with the same interpolant on
 counts band-limited by the PSF, see the guide), the camera adds its noise
-there, and the reduction turns each minute's observables by +θ back
-(`from_camera`, the UCOR step) before they are averaged.  The two rotations
+there, and the reduction turns the observables by +θ back (`from_camera`,
+the UCOR step).  GONG turns each minute before averaging; the turn is the
+same linear interpolation every minute, so turning the minutes' average, as
+the chain does, gives the same maps at a ninth of the cost.  The two rotations
 cancel geometrically (the maps keep their WCS, the truth maps stay aligned)
 and the noise goes through exactly one interpolation, as GONG's does.
 Pixels whose interpolation reaches beyond the detector take the nearest edge
