@@ -37,6 +37,8 @@ from sunpy import log
 
 from gongsynth import instruments, precompile
 from gongsynth.geometry import Pointing, as_obstime, disk_geometry
+from gongsynth.instruments.gong.header_counts import count_scale
+from gongsynth.instruments.gong.ucor import from_camera, to_camera
 from gongsynth.observing import site_location
 from gongsynth.products.maps import PRODUCTS, make_product_map
 from gongsynth.seeding import child_sequence
@@ -345,6 +347,13 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
     def camera(expected_counts):
         # GONG reduces every minute (minute_average); each plane sees its own image motion (frame_seeing).
         minutes = minutes_in(config.duration, inst) if effects.minute_average else 1
+        area = None
+        if config.like_counts:  # the real file's count level: that observation's effective area
+            scale = count_scale(expected_counts, config.like, inst)
+            expected_counts, area = expected_counts * scale, inst.effective_area * scale
+            log.info(f"like_counts: {config.like} implies an effective area of {area:.4g}")
+        if _rotates(effects, inst):  # the camera sees the Sun turned by the rotator; UCOR turns it back
+            expected_counts = to_camera(expected_counts, inst)
         seen = None
         if (effects.frame_seeing and effects.psf and effects.seeing and hasattr(inst, "seeing_wind_speed")
                 and inst.seeing_fwhm > 0 * u.arcsec and np.ndim(expected_counts) == 3):
@@ -360,6 +369,8 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
                                   dark=dark if effects.dark else False, photon_noise=effects.photon_noise,
                                   read_noise=effects.read_noise, dither=effects.dither,
                                   truncation=effects.truncation, workers=config.workers, progress=progress))
+            if area is not None:
+                raws[-1].header["EFFAREA"] = (round(area.to_value(u.cm**2), 5), "[cm2] like file's DIODEs")
             if minute:  # the same synthetic flat and dark every minute: hold one copy
                 raws[-1] = dataclasses.replace(raws[-1], flat=raws[0].flat, dark=raws[0].dark)
         return {"raw": raws[0] if minutes == 1 else sum_planes(raws), "raw_minutes": raws}
@@ -368,6 +379,9 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
         observables = reduce(raw, inst)
         if len(raw_minutes) > 1:
             observables = average_observables((reduce(r, inst) for r in raw_minutes), observables)
+        if _rotates(effects, inst):
+            # The same linear interpolation every minute: turning the average is turning each minute.
+            observables = from_camera(observables, inst)
         return {"observables": observables,
                 "sky": unmeasured(expected_counts, config, instrument=inst, obstime=pointing.obstime)}
 
@@ -396,6 +410,11 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
                         tuple(f"{p}_map" for p in PRODUCTS), maps,
                         "sunpy Maps with helioprojective WCS; sky blanked"))
     return stages
+
+
+def _rotates(effects, instrument):
+    """Whether a run turns its images as GONG's reduction does (`gongsynth.instruments.gong.ucor`)."""
+    return effects.image_rotation and hasattr(instrument, "image_rotation_angle")
 
 
 def line_of(instrument):

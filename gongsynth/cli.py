@@ -124,6 +124,9 @@ def build_parser():
     sim.add_argument("--like", type=Path, metavar="GONG.fits",
                      help="take date, site and plate scale from a real GONG full-disk file ('what GONG "
                           "saw at Big Bear on 2009-09-05 18:54'); --date and --site still win")
+    sim.add_argument("--like-counts", dest="like_counts", action="store_true", default=None,
+                     help="with --like: observe at the file's count level (its DIODE sums: that "
+                          "observation's effective area) instead of the instrument's effective_area")
     sim.add_argument("--pointing", type=_number(float), nargs=2, metavar=("TX", "TY"),
                      help="full-disk mode: helioprojective x and y of the detector's centre in arcsec "
                           "(default 0 0: the Sun's centre; --like takes the real file's)")
@@ -227,6 +230,8 @@ def _simulation_config(args):
             raise ValueError(f"--like {args.like}: {_cause(exc)} (expected a GONG full-disk FITS "
                              f"file)") from exc
         changes.update(taken)
+    if args.like_counts:
+        changes["like_counts"] = True
     switched = {e.name: getattr(args, f"effect_{e.name}") for e in dataclasses.fields(Effects)
                 if getattr(args, f"effect_{e.name}") is not None}
     if switched:

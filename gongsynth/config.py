@@ -78,6 +78,8 @@ _DOCS = {
     "dark_sha256": "SHA-256 of that dark, checked when the run is repeated",
     "site": f"the observer's ground site, a GONG site {sorted(GONG_SITES)}; unset: the Earth's centre",
     "like": "a real GONG full-disk FITS file whose date, site, plate scale and pointing the run takes",
+    "like_counts": "with like: scale the expected counts to the file's count level (its DIODE sums), i.e. "
+                   "the effective area of that observation (false: the instrument's effective_area)",
     "network": "full-disk mode: lay the magnetic network on supergranular cells over the large-scale field "
                "(true; false: the field as it is; unset: on for the synthetic and quiet Suns, off over an "
                "observed map, which holds the Sun's own network)",
@@ -118,6 +120,10 @@ class Effects:
     minute_average : bool
         GONG's averaging: a run of several minutes is reduced minute by
         minute and the maps averaged (`gongsynth.stages.averaging`).
+    image_rotation : bool
+        GONG's reduction turns every one-minute image by the rotator's angle
+        and so interpolates it once (`gongsynth.instruments.gong.ucor`;
+        instruments with ``image_rotation_angle`` only).
 
     Examples
     --------
@@ -137,6 +143,7 @@ class Effects:
     truncation: bool = True
     frame_seeing: bool = False
     minute_average: bool = False
+    image_rotation: bool = False
 
     def __post_init__(self):
         for f in fields(self):
@@ -342,6 +349,12 @@ class SimulationConfig:
     like : str or None
         A real GONG file whose date, site, plate scale and pointing the run
         took (see `gongsynth.observing.like_gong`; keys given explicitly win).
+    like_counts : bool
+        With ``like`` (GONG, full disk): scale the expected counts to the
+        file's count level, its ``DIODE1``-``DIODE3`` sums
+        (`gongsynth.instruments.gong.header_counts`), i.e. observe with that
+        observation's effective area (recorded as ``EFFAREA`` in the raw
+        header); default False: the instrument's ``effective_area``.
     network : bool or None
         Full-disk mode: lay the magnetic network on supergranular cells
         (`gongsynth.sun.surface_field.network`) over the large-scale field.
@@ -390,6 +403,7 @@ class SimulationConfig:
     dark_sha256: str | None = None
     site: str | None = None
     like: str | None = None
+    like_counts: bool = False
     pointing: tuple = (0 * u.arcsec, 0 * u.arcsec)
     instrument: object = field(default_factory=instruments.get)
     network: bool | None = None
@@ -452,6 +466,13 @@ class SimulationConfig:
         object.__setattr__(self, "site", check_site(self.site))
         if self.like is not None and not isinstance(self.like, str):
             raise TypeError(f"like must be the path of a GONG FITS file or None, got {self.like!r}")
+        if not isinstance(self.like_counts, bool):
+            raise TypeError(f"like_counts must be true or false, got {self.like_counts!r}")
+        if self.like_counts and (self.like is None or self.mode != "full-disk"
+                                 or self.instrument.name != "gong"):
+            raise ValueError(f"like_counts takes the count level of a real GONG file: it needs like (got "
+                             f"{self.like!r}), mode = 'full-disk' (got {self.mode!r}) and a GONG instrument "
+                             f"(got {self.instrument.name!r})")
         if self.surface_field is None and self.mode == "full-disk":
             object.__setattr__(self, "surface_field", DEFAULT_SURFACE_FIELD)
         if self.surface_field is not None and (not isinstance(self.surface_field, str)

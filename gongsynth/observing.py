@@ -256,7 +256,9 @@ def like_gong(path, *, settings=None, instrument=None, fixed_plate_scale=False, 
         missing.  The file is not read when nothing is missing, so a saved
         run configuration repeats without it.
     instrument : `~gongsynth.GONGInstrument`
-        With the file's plate scale (apparent radius / fitted limb radius).
+        With the file's plate scale (apparent radius / fitted limb radius)
+        and, unless it was changed from the default, the image rotation of
+        its reduction (``image_rotation_angle`` = −``ROTATOR``).
 
     Examples
     --------
@@ -280,4 +282,10 @@ def like_gong(path, *, settings=None, instrument=None, fixed_plate_scale=False, 
         settings.setdefault("pointing", view.pointing)
     if not fixed_plate_scale:
         instrument = instrument.replace(plate_scale=view.plate_scale.to(u.arcsec))
+    default_angle = getattr(type(instrument)(), "image_rotation_angle", None)
+    if default_angle is not None and u.allclose(instrument.image_rotation_angle, default_angle):
+        # GONG's reduction turns each image by the rotator's angle (GHIST: UCOR rot = -ROTATOR).
+        rotator = _header(path)[0].get("ROTATOR")
+        if rotator is not None:
+            instrument = instrument.replace(image_rotation_angle=(-float(rotator) * u.rad).to(u.deg))
     return settings, instrument

@@ -53,8 +53,10 @@ Other readings, and why they are not the default:
   magnetogram noise of 5.4 G, 1.7 times the real map's whole pixel-difference
   scatter in its quietest box (3.25 G, an upper bound on its noise); at
   650 adu it gives 3.1 G.  GONG's reduction interpolates each image once
-  (``GHIST``: UCOR rotates it by 1.8°), which lowers pixel noise by an amount
-  not known here; only a reduction by more than 40 % would save this reading,
+  (``GHIST``: UCOR rotates it by 1.8°, `gongsynth.instruments.gong.ucor`);
+  only a reduction of the pixel noise by more than 40 % would save this
+  reading, and the rotation, modelled, lowers it by 14 % in the simulated
+  map's quietest box (by 24 % on white noise far from the rotation's axis),
   so it is disfavoured rather than excluded.
 * *The image is the mean of the planes*: 1950 adu per frame, so that a
   one-minute plane would hold (1950 + 182 dither) × 600 / 8 ≈ 160 000 DN,
@@ -78,13 +80,11 @@ from astropy.table import QTable
 
 from gongsynth import instruments
 from gongsynth.analysis.disk import disk_coordinates
+from gongsynth.instruments.gong.header_counts import DIODE_KEYWORDS
 from gongsynth.instruments.gong.planes import N_CHANNELS, N_PLANES
 from gongsynth.stages.reduction import divide_flat, subtract_dark
 
 __all__ = ["DIODE_KEYWORDS", "PHASE_PLANES", "RealCountLevels", "real_count_levels", "count_levels"]
-
-#: The header keywords of the three phase planes' diode sums.
-DIODE_KEYWORDS = ("DIODE1", "DIODE2", "DIODE3")
 
 #: Accepted readings of the intensity image: the sum over 3 phase planes
 #: (each the mean of I+V and I-V, the default) or over all 6 planes.

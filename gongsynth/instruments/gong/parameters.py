@@ -17,6 +17,7 @@ from typing import ClassVar
 import astropy.constants as const
 import astropy.units as u
 
+from gongsynth.instruments.gong.ucor import INTERPOLANTS
 from gongsynth.instruments.parameters import InstrumentParameters, gauss_per_zeeman_velocity
 from gongsynth.instruments.parameters import plain_field as _plain
 from gongsynth.instruments.parameters import quantity_field as _param
@@ -101,6 +102,14 @@ class GONGInstrument(InstrumentParameters):
         the Big Bear file of 2009-09-05; Hill 2018, Space Weather 16, 1488):
         with ``effects.minute_average`` a run longer than this is reduced
         minute by minute and the magnetograms and Dopplergrams averaged.
+    image_rotation_angle : `~astropy.units.Quantity`, angle
+        GONG's reduction turns every one-minute image by the image rotator's
+        angle (`gongsynth.instruments.gong.ucor`, ``effects.image_rotation``):
+        1.785431° (``GHIST``: UCOR ``rot=1.785431`` = −``ROTATOR`` of the Big
+        Bear file of 2009-09-05; ``like`` takes the file's ``ROTATOR``).
+    image_interpolant : str
+        Its interpolant: ``"poly5"`` (the header's ``interp=4`` read as IRAF's
+        biquintic polynomial, a reading), ``"poly3"`` or ``"linear"``.
     effective_area : `~astropy.units.Quantity`, area
         Effective collecting area, 0.6 cm² (paper, Sec. 3.2).
     quantum_efficiency : `~astropy.units.Quantity`, dimensionless
@@ -224,6 +233,8 @@ class GONGInstrument(InstrumentParameters):
     seeing_outer_scale: u.Quantity = _param(20.0, u.m, "frame seeing: outer scale L0 (Ziad et al. 2004)")
     seeing_layer_height: u.Quantity = _param(100.0, u.m, "frame seeing: height of the turbulence (a choice)")
     magnetogram_cadence: u.Quantity = _param(1.0, u.min, "one magnetogram per minute (GONG headers, N_USED)")
+    image_rotation_angle: u.Quantity = _param(1.785431, u.deg, "UCOR rot of Big Bear 2009-09-05 (GHIST)")
+    image_interpolant: str = _plain("poly5", str, "UCOR interp=4 read as IRAF's biquintic polynomial")
     effective_area: u.Quantity = _param(0.6, u.cm**2, "effective collecting area (paper Sec. 3.2)")
     quantum_efficiency: u.Quantity = _param(0.16, u.dimensionless_unscaled, "CCD QE (paper Sec. 3.2)")
     gain: u.Quantity = _param(33.0, u.electron / u.adu, "ADU conversion factor (paper Sec. 3.2)")
@@ -272,6 +283,9 @@ class GONGInstrument(InstrumentParameters):
 
     def __post_init__(self):
         super().__post_init__()
+        if self.image_interpolant not in INTERPOLANTS:
+            raise ValueError(f"GONGInstrument.image_interpolant must be one of {sorted(INTERPOLANTS)}, "
+                             f"got {self.image_interpolant!r}")
         if self.prefilter_form not in PREFILTER_FORMS:
             raise ValueError(
                 f"GONGInstrument.prefilter_form must be one of {PREFILTER_FORMS}, got {self.prefilter_form!r}"
