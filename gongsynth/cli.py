@@ -187,7 +187,7 @@ def build_parser():
     cal.add_argument("--scene", choices=("angle", "distance"), default="angle",
                      help="'angle' (default): the curves at each pixel's viewing angle; 'distance': each "
                           "quiet pixel also times the shipped scene table's ratio at its distance from the "
-                          "map's own strong fields (|B| >= 400 G cos theta)")
+                          "map's own strong fields (abs(B) >= 400 G cos theta)")
     cal.add_argument("--overwrite", action="store_true", help="replace an existing output file")
     cal.add_argument("--open-flux", dest="open_flux", action="store_true",
                      help="synoptic maps: also the PFSS open flux (source surface 2.5 R_sun) before and "

@@ -20,7 +20,7 @@ Rules (documented in the guide's calibration page):
   pixels stay NaN.
 - **Scene** (``scene="distance"``, opt-in): each quiet pixel's calibrated
   value is multiplied by the scene table's ratio at its θ and its distance on
-  the Sun to the nearest strong pixel of the map itself (|B_measured| ≥ the
+  the Sun to the nearest strong pixel of the map itself (``|B_measured|`` ≥ the
   table's threshold × cos θ, by default the same 400 G × cos θ;
   `gongsynth.analysis.scene_calibration`; shipped:
   ``gongsynth/data/scene_factors.ecsv``).  The default ``scene="angle"``
