@@ -64,6 +64,21 @@ def test_calibrate_interpolates_in_viewing_angle():
     assert np.allclose(factors.data[on], expected / 10.0, rtol=1e-9)
 
 
+def test_a_simulated_tiled_map_has_its_runs_angle_at_every_pixel():
+    """A tiled run is one box seen at one angle: its WCS places only the frame's centre on the disk."""
+    from gongsynth.geometry import Pointing
+
+    table = _known_table({0: 2.0, 60: 1.0})
+    smap = _disk_map(np.full((101, 101), 10.0))   # 2000″ wide: the WCS corners are off the disk
+    smap.meta.update({"simmode": "tiled", "simlat": 45.0, "date-beg": "2020-01-01T00:00:00"})
+    theta = np.rad2deg(np.arccos(Pointing(45 * u.deg, "2020-01-01T00:00:00").mu))
+    assert abs(theta - 45) > 1   # B0 = -3°: the angle is the run's, not its latitude
+    assert np.allclose(viewing_angle(smap).to_value(u.deg), theta, rtol=0, atol=1e-9)
+    assert np.allclose(calibrate(smap, table=table).data, 10.0 * (2.0 - theta / 60), rtol=1e-6)
+    smap.meta["simmode"] = "full-disk"   # a full-disk simulation is a disk image like any other
+    assert np.isnan(viewing_angle(smap)[0, 0])
+
+
 def test_strong_pixels_use_the_sunspot_curve():
     quiet = _known_table({0: 2.0})
     t = np.random.default_rng(1).normal(0, 1000, 20_000)

@@ -110,6 +110,24 @@ def test_synoptic_distance_is_the_great_circle_on_the_sun():
     assert np.isinf(strong_field_distance(smap, np.zeros_like(strong)).value).all()
 
 
+def test_a_tiled_maps_distance_is_measured_in_its_box():
+    """A simulated tiled map: its box seen at the run's μ, not the disk its WCS would put it on."""
+    from gongsynth.geometry import Pointing
+
+    values = np.full((41, 41), 10.0)
+    values[20, 20] = 1000.0
+    smap = _disk_map(values, 500.0)   # 20000″ wide: most pixels' WCS coordinates miss the Sun
+    smap.meta.update({"simmode": "tiled", "simlat": 60.0, "date-beg": "2020-01-01T00:00:00"})
+    pointing = Pointing(60 * u.deg, "2020-01-01T00:00:00")
+    strong = values > 400
+    distance = strong_field_distance(smap, strong).to_value(u.Mm)
+    step = 500 * pointing.km_per_arcsec.to_value(u.Mm / u.arcsec)   # Mm per pixel east-west
+    rows, columns = np.mgrid[:41, :41]
+    expected = step * np.hypot(columns - 20, (rows - 20) / pointing.mu)
+    assert np.allclose(distance, expected, rtol=1e-12)
+    assert distance[21, 20] / distance[20, 21] == pytest.approx(1 / pointing.mu)   # foreshortened north-south
+
+
 def test_scene_ratio_interpolates_and_clamps():
     table = _table()
     d = [0, 30, 1e9] * u.Mm

@@ -44,7 +44,7 @@ from sunpy.coordinates import frames, sun
 from gongsynth.analysis.calibration import gauss_values
 from gongsynth.analysis.calibration_table import read_calibration_table, table_curve
 from gongsynth.analysis.cross_calibration_table import conversion_factors, read_cross_calibration_table
-from gongsynth.analysis.disk import check_map, disk_coordinates
+from gongsynth.analysis.disk import check_map, disk_coordinates, tiled_pointing
 from gongsynth.analysis.scene_calibration import (
     read_scene_table,
     scene_ratio,
@@ -111,8 +111,16 @@ def viewing_angle(smap):
     >>> theta = viewing_angle(m)
     >>> float(theta[4, 4].value), bool(np.isnan(theta[0, 0]))
     (0.0, True)
+
+    A simulated tiled map (``SIMMODE = 'tiled'``) is one box seen at one
+    angle and repeated over the frame: its WCS only places the frame's
+    centre on the disk, so every pixel gets the run's angle, that of its
+    field-centre latitude ``SIMLAT`` at ``DATE-BEG``.
     """
     check_map(smap)
+    pointing = tiled_pointing(smap)
+    if pointing is not None:
+        return np.full(smap.data.shape, np.rad2deg(np.arccos(pointing.mu))) * u.deg
     if is_synoptic(smap):
         ny, nx = smap.data.shape
         y, x = np.mgrid[:ny, :nx]

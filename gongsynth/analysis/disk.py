@@ -16,6 +16,8 @@ from astropy.coordinates import SkyCoord
 from astropy.wcs.utils import wcs_to_celestial_frame
 from sunpy.coordinates import frames
 
+from gongsynth.geometry import Pointing
+
 __all__ = [
     "check_map",
     "map_values",
@@ -28,6 +30,7 @@ __all__ = [
     "disk_coordinates",
     "local_pixel_scale",
     "disk_values",
+    "tiled_pointing",
 ]
 
 
@@ -358,3 +361,29 @@ def disk_values(smap, max_radius, name="smap"):
     with np.errstate(invalid="ignore"):
         keep = np.isfinite(data) & (rho < max_radius)
     return data[keep]
+
+
+def tiled_pointing(smap):
+    """
+    The pointing of a simulated tiled map's run, or None for any other map.
+
+    A tiled run (header ``SIMMODE = 'tiled'``) is one box of the Sun seen at one
+    angle and repeated over the frame; its WCS places only the frame's centre on
+    the disk.  Tools that need a pixel's viewing angle or a distance on the Sun
+    use this pointing instead of the WCS.
+
+    Parameters
+    ----------
+    smap : `~sunpy.map.GenericMap` or dict-like
+        A map, or its header.
+
+    Returns
+    -------
+    `~gongsynth.geometry.Pointing` or None
+        The run's field-centre latitude (``SIMLAT``) at its start (``DATE-BEG``).
+    """
+    meta = getattr(smap, "meta", smap)
+    if str(meta.get("simmode", "")).strip().lower() != "tiled" or meta.get("simlat") is None:
+        return None
+    start = meta.get("date-beg") or meta.get("date-obs")
+    return Pointing(float(meta["simlat"]) * u.deg, start)

@@ -41,6 +41,7 @@ from sunpy.coordinates import frames
 from sunpy.map import all_coordinates_from_map
 
 from gongsynth.analysis.calibration import gauss_values
+from gongsynth.analysis.disk import tiled_pointing
 from gongsynth.analysis.weak_flux import QUIET_LIMIT
 
 __all__ = ["SCENE_TABLE", "DISTANCE_EDGES", "strong_field_mask", "strong_field_distance",
@@ -98,6 +99,17 @@ def _unit_vectors(smap):
     return np.stack([np.cos(lat) * np.cos(lon), np.cos(lat) * np.sin(lon), np.sin(lat)], axis=-1)
 
 
+def _tile_positions(smap, pointing):
+    """Positions (ny, nx, 2) in Mm on a simulated tiled map's box (seen on the central meridian:
+    the north-south axis foreshortened by μ).
+    """
+    ny, nx = smap.data.shape
+    scale = [u.Quantity(s).to_value(u.arcsec / u.pix) for s in (smap.scale.axis1, smap.scale.axis2)]
+    mm_per_arcsec = pointing.km_per_arcsec.to_value(u.Mm / u.arcsec)
+    y, x = np.mgrid[:ny, :nx]
+    return np.stack([x * scale[0] * mm_per_arcsec, y * scale[1] * mm_per_arcsec / pointing.mu], axis=-1)
+
+
 def strong_field_distance(smap, strong, *, usable=None):
     """
     Each pixel's distance on the Sun to the nearest strong-field pixel.
@@ -116,22 +128,27 @@ def strong_field_distance(smap, strong, *, usable=None):
     -------
     `~astropy.units.Quantity`
         Great-circle distance (Mm, on a sphere of the map's ``rsun_meters``);
-        NaN off the Sun, infinity everywhere if no pixel is strong.
+        NaN off the Sun, infinity everywhere if no pixel is strong.  On a
+        simulated tiled map (`~gongsynth.analysis.disk.tiled_pointing`), the
+        distance in the run's box, its north-south axis foreshortened by μ.
     """
     strong = np.asarray(strong)
     if strong.dtype != bool or strong.shape != smap.data.shape:
         raise ValueError(f"strong must be a boolean array of the map's shape {smap.data.shape}, got "
                          f"{strong.dtype} {strong.shape}")
-    vectors = _unit_vectors(smap)
-    on_sun = np.all(np.isfinite(vectors), axis=-1)
+    pointing = tiled_pointing(smap)
+    positions = _unit_vectors(smap) if pointing is None else _tile_positions(smap, pointing)
+    on_sun = np.all(np.isfinite(positions), axis=-1)
     sources = strong & on_sun & (True if usable is None else np.asarray(usable, bool))
     out = np.full(strong.shape, np.nan)
     if not sources.any():
         out[on_sun] = np.inf
         return out * u.Mm
-    chord, _ = scipy.spatial.cKDTree(vectors[sources]).query(vectors[on_sun])
-    radius = u.Quantity(smap.rsun_meters, u.Mm).value
-    out[on_sun] = 2 * radius * np.arcsin(np.minimum(chord / 2, 1))
+    nearest, _ = scipy.spatial.cKDTree(positions[sources]).query(positions[on_sun])
+    if pointing is None:   # a chord between unit vectors: the great-circle distance
+        radius = u.Quantity(smap.rsun_meters, u.Mm).value
+        nearest = 2 * radius * np.arcsin(np.minimum(nearest / 2, 1))
+    out[on_sun] = nearest
     return out * u.Mm
 
 
