@@ -129,7 +129,7 @@ def strong_field_distance(smap, strong, *, usable=None):
     `~astropy.units.Quantity`
         Great-circle distance (Mm, on a sphere of the map's ``rsun_meters``);
         NaN off the Sun, infinity everywhere if no pixel is strong.  On a
-        simulated tiled map (`~gongsynth.analysis.disk.tiled_pointing`), the
+        simulated tiled map (``gongsynth.analysis.disk.tiled_pointing``), the
         distance in the run's box, its north-south axis foreshortened by μ.
     """
     strong = np.asarray(strong)
