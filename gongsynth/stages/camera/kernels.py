@@ -499,18 +499,21 @@ def frames_kernel(lam, seg_start, seg_snap, plane, dither, inv_gain, sigma, phot
     for k in range(plane.size):
         dither_sum[plane[k]] += dither[k]
     none = np.empty((0, 2, LANES))
+    # A bool variable, not the literal False: numba compiles a literal argument into a
+    # specialisation of its own, and `_run_block` costs ~20 s of CPU per specialisation;
+    # this way the engine and `sample_kernel` share one.
+    reference = first < 0
     for b in prange((n_pix + LANES - 1) // LANES):
         i0 = b * LANES
         lanes = min(LANES, n_pix - i0)
         acc = np.zeros((n_planes, LANES), np.int64)
         _run_block(lam, i0, lanes, seg_start, seg_snap, plane, inv_gain, sigma, photon, key0, key1, first,
-                   False, acc, none)
+                   reference, acc, none)
         for p in range(n_planes):
             for lane in range(lanes):
                 out[p, i0 + lane] = acc[p, lane] + dither_sum[p]
 
 
-@njit(parallel=True, cache=True, error_model="numpy")
 def sample_kernel(lam, n_frames, key0, key1, first, photon=True, reference=False):
     """
     The engine's variates themselves, for tests: ``n_frames`` frames of pixels of means ``lam``.
@@ -535,6 +538,15 @@ def sample_kernel(lam, n_frames, key0, key1, first, photon=True, reference=False
     electrons, normal : float64 (n_frames, n_pix)
         Poisson variates (λ itself if not ``photon``) and read-noise normal variates.
     """
+    # Plain Python values as plain types: an omitted or literal flag would compile a
+    # specialisation of its own (of this kernel and of `_run_block`, ~20 s of CPU each).
+    return _sample_kernel(np.ascontiguousarray(lam, np.float64), int(n_frames), np.uint64(key0),
+                          np.uint64(key1), int(first), bool(photon), bool(reference))
+
+
+@njit(parallel=True, cache=True, error_model="numpy")
+def _sample_kernel(lam, n_frames, key0, key1, first, photon, reference):
+    """`sample_kernel`'s compiled body (every argument required, of one type)."""
     n_pix = lam.size
     means = lam.reshape(1, 1, n_pix)
     seg_start = np.array([0, n_frames], np.int64)
