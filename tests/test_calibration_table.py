@@ -107,9 +107,11 @@ def test_synoptic_maps_use_latitude_and_b0():
 def test_a_small_sweep_builds_a_table():
     from gongsynth.calibration_sweep import build_calibration_table
 
+    # Tiny runs (the toy Sun on a coarse box, 48² pixels): the table's make-up, not its values.
     table = build_calibration_table([0, 60] * u.deg, seeds=[1, 2], regions=["quiet"], n_boot=10,
-                                    sun="milne-eddington", detector_shape=96, duration=1 * u.min,
-                                    progress=False)
+                                    sun="milne-eddington", detector_shape=48, duration=1 * u.min,
+                                    photosphere_shape=(64, 64), photosphere_pixel_size=1536 * u.km,
+                                    resolutions=(1,), progress=False)
     assert list(table["latitude"].to_value(u.deg)) == [0.0, 60.0]
     assert table["mu"][1] == pytest.approx(0.5, abs=0.1)
     assert np.all(table["factor"] > 0) and np.all(table["uncertainty"] > 0)

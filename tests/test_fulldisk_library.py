@@ -366,27 +366,27 @@ def test_a_full_disk_run_follows_the_synthetic_sun_of_its_date():
     from gongsynth.seeding import child_sequence
     from gongsynth.sun.surface_field import surface_field_at, synthetic_surface_field
 
-    # 10″ pixels of 5 × 5 samples: point sampling of the 384 km patch columns averages out.
-    coarse = GONGInstrument(plate_scale=10 * u.arcsec, detector_shape=200, supersampling=5)
+    # 16″ pixels of 5 × 5 samples: point sampling of the 384 km patch columns averages out.
+    coarse = GONGInstrument(plate_scale=16 * u.arcsec, detector_shape=125, supersampling=5)
     config = SimulationConfig(mode="full-disk", sun="milne-eddington", instrument=coarse, seed=4,
                               duration=1 * u.min, obstime="2014-04-01T18:00:00", site="BB")
     assert config.surface_field == "synthetic"
     assert SimulationConfig.from_toml(config.to_toml()) == config
     result = gongsynth.simulate(config=config, progress=False)
     # B_r μ of the synthetic Sun averaged over each pixel (at the scene's samples) ...
-    fine = disk_geometry((1000, 1000), coarse.plate_scale / 5, obstime=config.obstime)
+    fine = disk_geometry((625, 625), coarse.plate_scale / 5, obstime=config.obstime)
     field = synthetic_surface_field(config.obstime, seed=child_sequence(4, "surface-field"))
     b_r = surface_field_at(field, fine.longitude * u.deg, fine.latitude * u.deg, config.obstime).to_value(u.G)
     expected = np.where(fine.on_disk, np.nan_to_num(b_r) * fine.mu, 0)
-    expected = expected.reshape(200, 5, 200, 5).mean(axis=(1, 3))
-    g = disk_geometry((200, 200), coarse.plate_scale, obstime=config.obstime)
+    expected = expected.reshape(125, 5, 125, 5).mean(axis=(1, 3))
+    g = disk_geometry((125, 125), coarse.plate_scale, obstime=config.obstime)
     use = g.on_disk & (g.mu > 0.3) & np.isfinite(result.truth.data)
     # ... is what the true B_LOS follows, with the small scales' own mixed flux on top: slope 1, to
-    # within the scatter of the residual (pixels in one 30 Mm cell, ~4 × 4, are not independent).
+    # within the scatter of the residual (pixels in one 30 Mm cell, ~2.6 × 2.6, are not independent).
     truth, want = result.truth.data[use], expected[use]
     slope, offset = np.polyfit(want, truth, 1)
     residual = truth - (slope * want + offset)
-    sigma = residual.std() / (want.std() * np.sqrt(use.sum() / 16))
+    sigma = residual.std() / (want.std() * np.sqrt(use.sum() / 6.7))
     assert abs(slope - 1) < 5 * sigma and abs(offset) < 1.0
     # The truth maps: the detector's resolution, blanked exactly where the measured maps are.
     blank = np.isnan(result.magnetogram.data)

@@ -97,8 +97,9 @@ def test_paired_difference_of_two_runs():
 
     import gongsynth
 
-    result = gongsynth.simulate(seed=5, detector_shape=96, duration=1 * u.min, sun="milne-eddington",
-                                resolutions=(1,), progress=False)
+    coarse = dict(duration=1 * u.min, sun="milne-eddington", photosphere_shape=(64, 64),
+                  photosphere_pixel_size=1536 * u.km, resolutions=(1,), progress=False)
+    result = gongsynth.simulate(seed=5, detector_shape=96, **coarse)
     single = weak_flux_factor(result, n_boot=20)
     truth = result.truth_psf
     scaled = dataclasses.replace(result, truth_psf=sunpy.map.Map(truth.data * 1.5, truth.meta))
@@ -106,8 +107,7 @@ def test_paired_difference_of_two_runs():
     assert difference == pytest.approx(0.5 * single.factor, rel=1e-6)     # the maps are float32
     assert uncertainty == pytest.approx(0.5 * single.uncertainty, rel=1e-6)
     assert weak_flux_factor_difference(result, result, n_boot=20) == (0.0, 0.0)
-    other = gongsynth.simulate(seed=5, detector_shape=96, duration=1 * u.min, latitude=30 * u.deg,
-                               sun="milne-eddington", resolutions=(1,), progress=False)
+    other = gongsynth.simulate(seed=5, detector_shape=24, latitude=30 * u.deg, **coarse)
     with pytest.raises(ValueError, match="latitude"):
         weak_flux_factor_difference(result, other)
 

@@ -256,6 +256,14 @@ def _rows_of(value, rows):
     return value if np.ndim(value) == 0 else value[rows]
 
 
+def _kernel_columns(cols):
+    """The column parameters as the ME kernels take them: flat, C-ordered, writable float64.
+
+    A read-only (broadcast) column would make numba compile the kernel again for that type.
+    """
+    return {k: np.require(v.reshape(-1), np.float64, ["C", "W"]) for k, v in cols.items()}
+
+
 def _synthesize_rows(inputs, rows):
     """The StokesCube of the photosphere's ``rows`` (a slice) from `_checked_inputs`."""
     photosphere = inputs["photosphere"]
@@ -271,7 +279,7 @@ def _synthesize_rows(inputs, rows):
     eta0, damping = float(line.line_strength), float(line.damping)
     if method == "numba":
         tab_re, tab_im = voigt_table(damping)
-        flat = {k: v.reshape(-1) for k, v in cols.items()}
+        flat = _kernel_columns(cols)
         me_kernel(vgrid, flat["vshift"], flat["vzeeman"], flat["cosg"], flat["qfac"], flat["ufac"],
                   flat["bmu"], flat["scale"], eta0, damping, tab_re, tab_im,
                   *(a.reshape(ny * nx, vgrid.size) for a in out))
@@ -437,7 +445,7 @@ class DeferredStokes(DeferredCube):
             photosphere = inputs["photosphere"][rows]
             cols, b_par = _column_parameters(photosphere, _rows_of(inputs["mu"], rows),
                                              _rows_of(inputs["azimuth"], rows), lam0, inputs["g"], line)
-            flat = {k: v.reshape(-1) for k, v in cols.items()}
+            flat = _kernel_columns(cols)
             block = np.empty((weights.shape[0], flat["vshift"].size))
             me_project_kernel(vgrid, flat["vshift"], flat["vzeeman"], flat["cosg"], flat["qfac"],
                               flat["ufac"], flat["bmu"], flat["scale"], float(line.line_strength),
