@@ -14,9 +14,14 @@ same minute).
     python benchmarks/bench_pipeline.py [--shape 860] [--engine blocks] [--sun milne-eddington]
     python benchmarks/bench_pipeline.py --process 3 --sun milne-eddington
     python benchmarks/bench_pipeline.py --photosphere-shape 1024 --pixel-size 96   # the papers' grid
+    python benchmarks/bench_pipeline.py --photosphere-shape 1024 --pixel-size 96 --full-grid  # 51 wavelengths
 
 In-process runs print each stage's time and peak resident memory (sampled every 0.2 s), the CPU
 time, and the peak as a ratio to the process's memory after its imports (the same process).
+Before the run they time a baseline in the same process: `rt.synthesize` of a 64² × 80-height
+3-D Sun at 51 wavelengths (its CPU and wall seconds; the run's are also given as multiples of it).
+``--full-grid`` runs the 3-D Sun's GONG synthesis on the default 51 wavelengths instead of
+`~gongsynth.sun.model_atmosphere.transfer.channel_wavelength`'s 39 (the state before issue 26).
 """
 import argparse
 import os
@@ -75,6 +80,8 @@ def main():
                         help="columns of the built-in Sun, N x N (the papers' grid: 1024)")
     parser.add_argument("--pixel-size", type=float, default=None, metavar="KM",
                         help="column spacing of the built-in Sun in km (the papers' grid: 96)")
+    parser.add_argument("--full-grid", action="store_true",
+                        help="the 3-D Sun's synthesis on the default 51 wavelengths (before issue 26)")
     parser.add_argument("--process", type=int, default=0, metavar="N",
                         help="time N whole 'gongsynth simulate' processes instead")
     args = parser.parse_args()
@@ -87,7 +94,11 @@ def main():
         grid["photosphere_shape"] = (args.photosphere_shape,) * 2
     if args.pixel_size:
         grid["photosphere_pixel_size"] = args.pixel_size * u.km
+    if args.full_grid:
+        from gongsynth import chain
+        chain.channel_wavelength = gongsynth.rt.default_wavelength
     floor_mb = _rss_mb()       # the baseline: this process after its imports, before any stage
+    base_wall, base_cpu = _baseline()
     peaks, cpus = _stage_peaks()
     start, cpu = time.perf_counter(), time.process_time()
     result = gongsynth.simulate(seed=1, detector_shape=args.shape, engine=args.engine, sun=args.sun,
@@ -103,8 +114,20 @@ def main():
               f"peak RSS {peaks.get(stage, 0):6.0f} MB")
     print(f"  {'total':<16s} {total:7.2f} s wall, {cpu:.2f} s CPU (set-up outside the stages: "
           f"{total - sum(result.timings.values()):.2f} s)")
+    print(f"  baseline         {base_wall:7.2f} s wall, {base_cpu:.2f} s CPU (rt.synthesize, 64² x 80 x 51, "
+          f"before the run): the run is {total / base_wall:.1f} x its wall, {cpu / base_cpu:.1f} x its CPU")
     print(f"  peak memory      {peak_mb:7.0f} MB = {peak_mb / floor_mb:.2f} x the process after its imports "
           f"({floor_mb:.0f} MB)")
+
+
+def _baseline():
+    """(wall s, CPU s) of `rt.synthesize` of a 64² × 80-height 3-D Sun, μ = 0.8, 51 wavelengths."""
+    from gongsynth.sun.model_atmosphere import model_atmosphere
+    atm = model_atmosphere((64, 64), 96 * u.km, seed=1)
+    gongsynth.rt.synthesize(atm[:2, :2], mu=0.8, progress=False)
+    start, cpu = time.perf_counter(), time.process_time()
+    gongsynth.rt.synthesize(atm, mu=0.8, azimuth=-90 * u.deg, progress=False)
+    return time.perf_counter() - start, time.process_time() - cpu
 
 
 def _rss_mb():

@@ -53,7 +53,7 @@ from gongsynth.stages.scene.tiled import tiled_scenes
 from gongsynth.stages.seeing import SeeingPlanes, frame_motion
 from gongsynth.sun.atmosphere import Atmosphere
 from gongsynth.sun.model_atmosphere import model_sun
-from gongsynth.sun.model_atmosphere.transfer import DeferredTransfer
+from gongsynth.sun.model_atmosphere.transfer import DeferredTransfer, channel_wavelength
 from gongsynth.sun.photosphere import DeferredStokes
 from gongsynth.sun.rt.synthesis import synthesize as rt_synthesize
 from gongsynth.sun.sampling import check_spectral_sampling
@@ -292,8 +292,10 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
             def atmosphere_transfer(photosphere):
                 precompile.wait(progress=verbose)
                 # Deferred: the channels stage assembles and synthesises it block by block, never whole.
+                # GONG's channels need 39 of the default 51 wavelengths (channel_wavelength).
+                grid = {"wavelength": channel_wavelength()} if inst.name == "gong" else {}
                 return {"stokes": DeferredTransfer(photosphere, mu=pointing.mu, azimuth=pointing.los_azimuth,
-                                                   progress=progress, **line_of(inst))}
+                                                   progress=progress, **line_of(inst), **grid)}
 
             stages.append(Stage("synthesis", ("photosphere",), ("stokes",), atmosphere_transfer,
                                 "LTE Stokes radiative transfer of the model atmosphere at the pointing's mu "
