@@ -38,6 +38,9 @@ def test_gong_run_synthesises_channel_wavelength():
     stokes = next(s for s in chain if s.name == "synthesis")(state)["stokes"]
     assert isinstance(stokes, DeferredTransfer)
     assert np.array_equal(stokes.wavelength, channel_wavelength())
+    build_chain(config, stokes=stokes)    # handed back to a run: its own grid is not refused
+    with pytest.raises(ValueError, match="steps of up to 4.00 pm"):
+        build_chain(config, stokes=stokes.cube())     # as a plain cube it is (the rule for any cube)
 
 
 def test_channel_integrals_on_channel_wavelength_within_1e_4():
