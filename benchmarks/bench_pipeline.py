@@ -14,14 +14,11 @@ same minute).
     python benchmarks/bench_pipeline.py [--shape 860] [--engine blocks] [--sun milne-eddington]
     python benchmarks/bench_pipeline.py --process 3 --sun milne-eddington
     python benchmarks/bench_pipeline.py --photosphere-shape 1024 --pixel-size 96   # the papers' grid
-    python benchmarks/bench_pipeline.py --photosphere-shape 1024 --pixel-size 96 --full-grid  # 51 wavelengths
 
 In-process runs print each stage's time and peak resident memory (sampled every 0.2 s), the CPU
 time, and the peak as a ratio to the process's memory after its imports (the same process).
 Before the run they time a baseline in the same process: `rt.synthesize` of a 64² × 80-height
 3-D Sun at 51 wavelengths (its CPU and wall seconds; the run's are also given as multiples of it).
-``--full-grid`` runs the 3-D Sun's GONG synthesis on the default 51 wavelengths instead of
-`~gongsynth.sun.model_atmosphere.transfer.channel_wavelength`'s 39 (the state before issue 26).
 """
 import argparse
 import os
@@ -80,8 +77,6 @@ def main():
                         help="columns of the built-in Sun, N x N (the papers' grid: 1024)")
     parser.add_argument("--pixel-size", type=float, default=None, metavar="KM",
                         help="column spacing of the built-in Sun in km (the papers' grid: 96)")
-    parser.add_argument("--full-grid", action="store_true",
-                        help="the 3-D Sun's synthesis on the default 51 wavelengths (before issue 26)")
     parser.add_argument("--process", type=int, default=0, metavar="N",
                         help="time N whole 'gongsynth simulate' processes instead")
     args = parser.parse_args()
@@ -94,9 +89,6 @@ def main():
         grid["photosphere_shape"] = (args.photosphere_shape,) * 2
     if args.pixel_size:
         grid["photosphere_pixel_size"] = args.pixel_size * u.km
-    if args.full_grid:
-        from gongsynth import chain
-        chain.channel_wavelength = gongsynth.rt.default_wavelength
     floor_mb = _rss_mb()       # the baseline: this process after its imports, before any stage
     base_wall, base_cpu = _baseline()
     peaks, cpus = _stage_peaks()

@@ -53,7 +53,7 @@ from gongsynth.stages.scene.tiled import tiled_scenes
 from gongsynth.stages.seeing import SeeingPlanes, frame_motion
 from gongsynth.sun.atmosphere import Atmosphere
 from gongsynth.sun.model_atmosphere import model_sun
-from gongsynth.sun.model_atmosphere.transfer import DeferredTransfer, channel_wavelength
+from gongsynth.sun.model_atmosphere.transfer import DeferredTransfer
 from gongsynth.sun.photosphere import DeferredStokes
 from gongsynth.sun.rt.synthesis import synthesize as rt_synthesize
 from gongsynth.sun.sampling import check_spectral_sampling
@@ -292,10 +292,8 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
             def atmosphere_transfer(photosphere):
                 precompile.wait(progress=verbose)
                 # Deferred: the channels stage assembles and synthesises it block by block, never whole.
-                # GONG's channels need 39 of the default 51 wavelengths (channel_wavelength).
-                grid = {"wavelength": channel_wavelength()} if inst.name == "gong" else {}
                 return {"stokes": DeferredTransfer(photosphere, mu=pointing.mu, azimuth=pointing.los_azimuth,
-                                                   progress=progress, **line_of(inst), **grid)}
+                                                   progress=progress, **line_of(inst))}
 
             stages.append(Stage("synthesis", ("photosphere",), ("stokes",), atmosphere_transfer,
                                 "LTE Stokes radiative transfer of the model atmosphere at the pointing's mu "
@@ -318,11 +316,8 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
                                 "LTE Stokes radiative transfer of the atmosphere at the pointing's mu"))
         else:
             pointing.check_mu(stokes.mu)
-            # Before any work: a window too narrow or too coarse for the channel integrals is refused
-            # (a GONG run's own transfer, on channel_wavelength's thinned wings, is not).
-            if not (isinstance(stokes, DeferredTransfer) and inst.name == "gong"
-                    and np.array_equal(stokes.wavelength, channel_wavelength())):
-                check_spectral_sampling(stokes.wavelength, inst, name="the Stokes cube's wavelength")
+            # Before any work: a window too narrow or too coarse for the channel integrals is refused.
+            check_spectral_sampling(stokes.wavelength, inst, name="the Stokes cube's wavelength")
 
             def given():
                 return {"stokes": stokes}

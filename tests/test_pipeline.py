@@ -348,7 +348,6 @@ def test_the_model_atmosphere_sun_goes_through_the_radiative_transfer():
     from gongsynth.geometry import Pointing
     from gongsynth.seeding import child_sequence
     from gongsynth.sun.model_atmosphere import model_atmosphere
-    from gongsynth.sun.model_atmosphere.transfer import channel_wavelength
 
     cfg = SimulationConfig(seed=4, sun="model-atmosphere", latitude=60 * u.deg, photosphere_shape=(24, 24),
                            photosphere={"spot": False}, detector_shape=16, resolutions=(1,),
@@ -358,8 +357,7 @@ def test_the_model_atmosphere_sun_goes_through_the_radiative_transfer():
                            spot=False)
     assert np.array_equal(state["photosphere"].raw("temperature"), atm.raw("temperature"))
     pointing = Pointing(60 * u.deg, cfg.obstime)
-    cube = gongsynth.rt.synthesize(atm, mu=pointing.mu, azimuth=pointing.los_azimuth, progress=False,
-                                   wavelength=channel_wavelength())   # GONG's 39 wavelengths
+    cube = gongsynth.rt.synthesize(atm, mu=pointing.mu, azimuth=pointing.los_azimuth, progress=False)
     assert state["stokes"].mu == pytest.approx(0.5, abs=0.01)
     assert np.array_equal(state["stokes"].V.value, cube.V.value)
     assert np.array_equal(state["stokes"].blos.value, cube.blos.value)

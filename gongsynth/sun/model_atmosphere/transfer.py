@@ -28,60 +28,10 @@ from gongsynth.sun.rt.rays import ray_offsets
 from gongsynth.sun.stokes import DeferredCube, StokesCube
 from gongsynth.validation import check_wavelength_grid
 
-__all__ = ["DeferredTransfer", "channel_wavelength", "CORE_HALF_WIDTH"]
+__all__ = ["DeferredTransfer"]
 
 # `reference_height`'s default sample of the box (`gongsynth.sun.rt.synthesis`).
 _REFERENCE_COLUMNS = 4096
-
-#: Half width of the core of `channel_wavelength` where every point of the default grid is kept (nm).
-CORE_HALF_WIDTH = 0.026
-
-
-def channel_wavelength(line=None):
-    """
-    The wavelengths GONG's channel integrals need: 39 of the default grid's 51.
-
-    Every point of `gongsynth.sun.rt.synthesis.default_wavelength` (2 pm
-    steps over ±50 pm) within ±`CORE_HALF_WIDTH` of the line, every other
-    one beyond (4 pm steps out to ±50 pm): the same wavelengths, bit for bit,
-    where kept.  Beyond the core the line's wings are nearly linear over
-    4 pm, so the filter quadrature's piecewise-linear interpolant of the
-    spectrum (`gongsynth.instruments.quadrature.channel_weights`) changes
-    little.  Measured on the 1024² × 96 km Sun of seed 1 (rows through the
-    umbra, 2.7 kG, and through granulation and network; GONG at disk
-    centre; ``benchmarks/validate_transfer_grid.py``): the six channel
-    integrals of every column within 4.7e-5 (relative) of the 51-point
-    grid's, B_LOS within 0.63 G and v within 1.6 m/s per column (0.63 G and
-    0.05 m/s over 16 × 16 columns, 1.5 Mm), where the 51-point grid itself
-    is 1.1e-3, 2.8 G and 2.6 m/s from a converged one (0.5 pm over
-    ±100 pm).  The radiative transfer's work is in proportion to the
-    wavelengths: 24 % less.  Keeping every point within ±24 pm, or 6 pm
-    steps beyond ±26 pm, doubles the error (1.2e-4 to 1.8e-4).
-
-    Parameters
-    ----------
-    line : str or `~gongsynth.sun.rt.atomic_data.LineData`, optional
-        Default ``"Ni I 676.8"`` (GONG's).
-
-    Returns
-    -------
-    `~astropy.units.Quantity`
-        nm, increasing.
-
-    Examples
-    --------
-    >>> w = channel_wavelength()
-    >>> w.size, bool(np.isin(w, rt_synthesis.default_wavelength()).all())
-    (39, True)
-    >>> np.round(np.diff(w.to_value(u.pm))[[0, 10, 19]], 6).tolist()
-    [4.0, 2.0, 2.0]
-    """
-    full = rt_synthesis.default_wavelength(line)
-    offset = np.abs(np.arange(full.size) - full.size // 2)
-    step = (full[1] - full[0]).to_value(u.nm)
-    core = int(round(CORE_HALF_WIDTH / step))
-    return full[(offset <= core) | ((offset - core) % 2 == 0)]
-
 
 class DeferredTransfer(DeferredCube):
     """
@@ -107,8 +57,7 @@ class DeferredTransfer(DeferredCube):
         A progress bar over the blocks.
     wavelength : `~astropy.units.Quantity`, optional
         Air wavelengths, as in `gongsynth.rt.synthesize` (default its
-        `~gongsynth.sun.rt.synthesis.default_wavelength`; a GONG run takes
-        `channel_wavelength`).
+        `~gongsynth.sun.rt.synthesis.default_wavelength`, 51 points).
 
     Examples
     --------
