@@ -9,6 +9,7 @@ import numpy as np
 from gongsynth.sun.atmosphere import Atmosphere
 from gongsynth.sun.model_atmosphere import flux_elements as fe
 from gongsynth.sun.model_atmosphere.builder import assemble_rows
+from gongsynth.threads import run_chunks
 
 __all__ = ["ModelSun"]
 
@@ -66,9 +67,14 @@ class ModelSun:
         plan = self._plan
         if self._canopy is None and plan["spectra"]:
             canopy = np.empty((3,) + self.shape, dtype=np.float32)
-            for k, zk in enumerate(plan["z"]):
-                canopy[0, k], canopy[1, k], canopy[2, k] = fe.potential_layer(plan["grid"], plan["spectra"],
-                                                                             plan["bases"], zk)
+
+            def layers(start, stop):
+                for k in range(start, stop):
+                    canopy[0, k], canopy[1, k], canopy[2, k] = fe.potential_layer(
+                        plan["grid"], plan["spectra"], plan["bases"], plan["z"][k])
+
+            # Heights on threads (numpy's and scipy.fft's loops release the GIL): each its own bits.
+            run_chunks(layers, plan["z"].size)
             self._canopy = canopy
         return self._canopy
 

@@ -26,12 +26,12 @@ from gongsynth.sun.rt import synthesis as rt_synthesis
 from gongsynth.sun.rt.atomic_data import get_line
 from gongsynth.sun.rt.rays import ray_offsets
 from gongsynth.sun.stokes import DeferredCube, StokesCube
+from gongsynth.validation import check_wavelength_grid
 
 __all__ = ["DeferredTransfer"]
 
 # `reference_height`'s default sample of the box (`gongsynth.sun.rt.synthesis`).
 _REFERENCE_COLUMNS = 4096
-
 
 class DeferredTransfer(DeferredCube):
     """
@@ -55,6 +55,9 @@ class DeferredTransfer(DeferredCube):
     line : str or `~gongsynth.sun.rt.atomic_data.LineData`, optional
     progress : bool
         A progress bar over the blocks.
+    wavelength : `~astropy.units.Quantity`, optional
+        Air wavelengths, as in `gongsynth.rt.synthesize` (default its
+        `~gongsynth.sun.rt.synthesis.default_wavelength`, 51 points).
 
     Examples
     --------
@@ -72,7 +75,7 @@ class DeferredTransfer(DeferredCube):
 
     _method = "LTE radiative transfer by blocks"
 
-    def __init__(self, sun, *, mu, azimuth, line=None, progress=False):
+    def __init__(self, sun, *, mu, azimuth, line=None, progress=False, wavelength=None):
         if not isinstance(sun, ModelSun):
             raise TypeError(f"sun must be a ModelSun (gongsynth.sun.model_atmosphere.model_sun), "
                             f"got {type(sun).__name__}")
@@ -83,7 +86,9 @@ class DeferredTransfer(DeferredCube):
         self._mu, self._az, self._azimuth = float(mu_value), float(az), azimuth
         self._line = get_line(line)
         self._progress = progress
-        self._wavelength = rt_synthesis.default_wavelength(self._line)
+        if wavelength is None:
+            wavelength = rt_synthesis.default_wavelength(self._line)
+        self._wavelength = check_wavelength_grid(wavelength, self._line.wavelength_nm * u.nm).to(u.nm)
         self._blos = None
         self._meta = None
         self._cube = None
@@ -183,7 +188,8 @@ class DeferredTransfer(DeferredCube):
                 box = self._sun.rows(np.arange(start - below, rows.stop + above))
                 keep = slice(below, below + n)
             cube = rt_synthesis.synthesize(box, mu=self._mu, azimuth=self._azimuth, line=self._line,
-                                           progress=False, anchor_height=z_ref * u.km)
+                                           wavelength=self._wavelength, progress=False,
+                                           anchor_height=z_ref * u.km)
             del box
             part = cube[keep]
             blos[rows] = part.blos.to_value(u.G)
