@@ -85,6 +85,8 @@ _BOOT = ("import importlib.machinery, sys, types\n"
 
 # A task's state in the queue file (one byte per task): free, claimed by compiler ``1 + n``, done.
 _FREE, _DONE = 0, 255
+# A file each compiler appends its tasks to (compiler, function, start and end time, CPU s): a diagnostic.
+_LOG = "GONGSYNTH_PRECOMPILE_LOG"
 # Seconds between two looks at the queue while the other compiler's task is needed first.
 _POLL = 0.01
 
@@ -419,6 +421,7 @@ def _compile_here(kernels, worker, queue):
                 time.sleep(_POLL)      # the other compiler's task is needed first
                 continue
             task = tasks[number]
+            began = (time.time(), time.process_time())
             try:
                 dispatcher = getattr(importlib.import_module(task["module"]), task["function"])
                 for argtypes in task["signatures"]:
@@ -426,6 +429,10 @@ def _compile_here(kernels, worker, queue):
             except Exception:   # a stale entry: the run compiles that kernel itself
                 failed += 1
             _set(queue, number, _DONE)
+            if os.environ.get(_LOG):
+                with open(os.environ[_LOG], "a") as log:
+                    log.write(f"{worker} {task['function']} {began[0]:.3f} {time.time():.3f} "
+                              f"{time.process_time() - began[1]:.3f}\n")
     with _turns(folder / "gongsynth-precompile.lock"):
         _record(folder, kernels, tasks)
     return 1 if failed else 0
