@@ -1,6 +1,7 @@
 """The background compile of a first run's kernels (`gongsynth.precompile`, issue 26)."""
 import json
 import os
+import sys
 
 import astropy.units as u
 import numba
@@ -105,7 +106,11 @@ def test_background_compile(cache, tmp_path, fork):
 
     kernels = _tiny_list(tmp_path, _TINY)
     assert not precompile.compiled(kernels)
+    import threading
+
     assert precompile.start(kernels, fork=fork)
+    forked = [isinstance(job, precompile._Forked) for job in precompile._jobs]
+    assert forked == [False, fork and sys.platform == "linux" and threading.active_count() == 1]
     queue = precompile._queue[0]
     assert queue.exists() and not precompile.start(kernels)        # this process's compilers run already
     assert precompile.wait("no such stage", progress=False) == 0   # a stage the list does not know
