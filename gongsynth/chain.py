@@ -180,6 +180,7 @@ class Chain(list):
                 if progress and bar.disable:
                     log.info(f"gongsynth: stage {number}/{stop} {stage.name}: {stage.description}")
                 start = time.perf_counter()
+                precompile.wait(stage.name, progress=progress)   # a first run: the kernels it needs
                 stage(state)
                 seconds = time.perf_counter() - start
                 log.debug(f"gongsynth: stage {stage.name} took {seconds:.2f} s")

@@ -4,18 +4,28 @@ A first run's kernels compiled in background processes while the run starts (iss
 numba compiles gongsynth's kernels on their first call in a new environment and
 keeps them in its cache (``NUMBA_CACHE_DIR``, by default ``__pycache__`` next to
 the sources); a later run loads them.  A first ``gongsynth simulate`` would
-otherwise spend ~25 s of CPU compiling the 3-D Sun's builder and the radiative
+otherwise spend ~22 s of CPU compiling the 3-D Sun's builder and the radiative
 transfer before it could synthesise anything, one kernel after the other.
 
-`start` launches compiler processes (one per group of `KERNELS`, two groups,
-each about half the compile time: the radiative transfer's solver, and the
-rest) that compile the kernels of the README's run, by the argument types
-recorded in `KERNELS`, into the same cache, while the run imports its libraries
-and builds its photosphere.  A stage calls `wait` before it needs them: it
-blocks (logging "compiling kernels (first run only)") until the compilers have
-ended, then loads the kernels from the cache.  The ``gongsynth`` command starts
-them at ``import gongsynth`` (before sunpy's ~5 s of imports) for a
-``simulate``; a script can call `start` itself.
+`start` launches two compiler processes that share one queue of tasks: every
+numba function of the README's run that has a cache (the kernels called from
+Python and the functions they call), with the argument types it is compiled
+for, its compile time and the tasks it calls (`KERNELS`).  A compiler takes the
+first task of the queue whose callees are compiled (the queue is ordered by the
+longest chain of compiles that follows each task, so the radiative transfer's
+solver chain starts at once and the short kernels fill in beside it); a callee
+compiled by the other process is loaded from the cache, not compiled again.
+The first compiler is a new Python process (it imports only the kernels'
+modules: a stub ``gongsynth`` package skips the package's ``__init__``, which
+imports sunpy.map); where the platform forks (Linux), the second is a fork of
+the run itself once it has imported those modules and set numba up, which it
+needs anyway: that saves the second compiler's ~2 s of imports.  They work
+while the run imports its libraries and builds its photosphere.  A stage calls
+`wait` before it needs the kernels: it blocks (logging "compiling kernels
+(first run only)") until the compilers have ended, then loads the kernels from
+the cache.  The ``gongsynth`` command starts them at ``import gongsynth``
+(before sunpy's ~5 s of imports) for a ``simulate``; a script can call `start`
+itself.
 
 Safety:
 
@@ -25,15 +35,17 @@ Safety:
 - Two first runs at once: their compilers take turns on a lock file in the
   numba cache, and the later ones find the record whole.  numba writes each
   cache file atomically, so a run that compiles a kernel itself at the same
-  time (after `TIMEOUT`, or when a compiler failed) breaks nothing.
-- A failed or slow compiler never stops a run: `wait` returns when the
-  processes have ended, however they ended, or after `TIMEOUT` seconds (then
-  it stops them); the run compiles what it still needs itself.  A stale
-  `KERNELS` list (a kernel renamed or retyped) costs time, never a result.
+  time (after `TIMEOUT`, or when a compiler failed) breaks nothing.  The two
+  compilers of one run never compile the same function at once (one task per
+  function, all its signatures).
+- A failed or slow compiler never stops a run: a compiler that waits for the
+  other's task stops waiting when the other has ended (its lock is free) and
+  compiles what is left itself; `wait` returns when the processes have ended,
+  however they ended, or after `TIMEOUT` seconds (then it stops them); the run
+  compiles what it still needs itself.  A stale `KERNELS` list (a kernel
+  renamed or retyped) costs time, never a result.
 - ``GONGSYNTH_PRECOMPILE=0`` (or ``off``) switches the mechanism off.
 
-A compiler imports only the kernels' modules (a stub ``gongsynth`` package skips
-the package's ``__init__``, which imports sunpy.map): ~2 s of imports, not ~7.
 `KERNELS` is written by ``python benchmarks/bench_compile.py --write-kernels``
 from a run with an empty numba cache.
 """
@@ -46,7 +58,7 @@ import time
 from pathlib import Path
 
 __all__ = ["start", "start_for_command", "wait", "enabled", "compiled", "load_kernels", "ENV", "TIMEOUT",
-           "MANIFEST", "KERNELS"]
+           "MANIFEST", "KERNELS", "WORKERS"]
 
 #: The environment variable that switches background compiling off (``0``, ``off``, ``no``, ``false``).
 ENV = "GONGSYNTH_PRECOMPILE"
@@ -54,9 +66,12 @@ ENV = "GONGSYNTH_PRECOMPILE"
 TIMEOUT = 300.0
 #: The record of a finished compile, in the numba cache folder of this module.
 MANIFEST = "gongsynth-precompile.json"
-#: The kernels of the README's run: groups of ``[module, function, [argument types]]``, one
-#: compiler process per group (`benchmarks/bench_compile.py --write-kernels` writes it).
+#: The tasks of the README's run, in queue order: ``{"module", "function", "signatures": [[argument
+#: type, ...], ...], "cpu_s", "calls": [task index, ...]}`` (`benchmarks/bench_compile.py
+#: --write-kernels` writes it).
 KERNELS = Path(__file__).parent / "data" / "precompile_kernels.json"
+#: Compiler processes on a machine of two cores or more (one on one core).
+WORKERS = 2
 
 # The compiler process: a stub package (no gongsynth/__init__: no sunpy), then `_compile_here`.
 _BOOT = ("import importlib.machinery, sys, types\n"
@@ -66,11 +81,21 @@ _BOOT = ("import importlib.machinery, sys, types\n"
          "pkg.__spec__.submodule_search_locations = [sys.argv[1]]\n"
          "sys.modules['gongsynth'] = pkg\n"
          "from gongsynth import precompile\n"
-         "sys.exit(precompile._compile_here(sys.argv[2], int(sys.argv[3])))\n")
+         "sys.exit(precompile._compile_here(sys.argv[2], int(sys.argv[3]), sys.argv[4]))\n")
+
+# A task's state in the queue file (one byte per task): free, claimed by compiler ``1 + n``, done.
+_FREE, _DONE = 0, 255
+# A file each compiler appends its tasks to (compiler, function, start and end time, CPU s): a diagnostic.
+_LOG = "GONGSYNTH_PRECOMPILE_LOG"
+# Seconds between two looks at the queue while the other compiler's task is needed first.
+_POLL = 0.01
 
 _lock = threading.Lock()
-_jobs = []           # this process's compilers (`subprocess.Popen`)
+_jobs = []           # this process's compilers (`subprocess.Popen` or `_Forked`)
 _started = [None]    # when they were started (`time.monotonic`)
+_queue = [None]      # their queue file
+_kernels = [None]    # their list (`KERNELS` read)
+_said = [False, 0.0]  # "compiling kernels" logged; seconds waited
 
 
 def enabled():
@@ -97,7 +122,7 @@ def _cache_folder():
 
 def load_kernels(path=None):
     """
-    The groups of kernels to compile, as recorded in `KERNELS`.
+    The compile tasks, in queue order, as recorded in `KERNELS`.
 
     Parameters
     ----------
@@ -106,11 +131,14 @@ def load_kernels(path=None):
 
     Returns
     -------
-    list of list
-        Each group a list of ``[module, function, [argument type, ...]]``, the types
-        as numba prints them (``"int64"``, ``"readonly array(float32, 3d, A)"``).
+    list of dict
+        Each ``{"module", "function", "signatures", "cpu_s", "calls"}``: the
+        function's argument types as numba prints them (``"int64"``,
+        ``"readonly array(float32, 3d, A)"``), one list per signature; its
+        compile CPU seconds; the indices of the tasks it calls (earlier in the
+        list).
     """
-    return json.loads(Path(KERNELS if path is None else path).read_text())["groups"]
+    return json.loads(Path(KERNELS if path is None else path).read_text())["tasks"]
 
 
 def compiled(kernels=None):
@@ -143,9 +171,18 @@ def compiled(kernels=None):
         return False
 
 
-def start(kernels=None):
+def _workers():
+    """How many compilers: `WORKERS` where there are two cores and file locks (they coordinate by them)."""
+    try:
+        import fcntl  # noqa: F401
+    except ImportError:   # pragma: no cover - Windows
+        return 1
+    return WORKERS if (os.cpu_count() or 1) > 1 else 1
+
+
+def start(kernels=None, *, fork=True):
     """
-    Start compiling the kernels of ``kernels`` in background processes, one per group.
+    Start compiling the tasks of ``kernels`` in background processes.
 
     Does nothing when switched off (`ENV`), when they are compiled already
     (`compiled`), or when this process's compilers run.
@@ -154,6 +191,10 @@ def start(kernels=None):
     ----------
     kernels : path-like, optional
         The list to compile (default `KERNELS`).
+    fork : bool, optional
+        Make the second compiler a fork of this process after it has imported
+        the tasks' modules (where ``os.fork`` exists and this process runs one
+        thread); otherwise, or when that fails, a new process like the first.
 
     Returns
     -------
@@ -165,20 +206,85 @@ def start(kernels=None):
             return False
         kernels = str(Path(KERNELS if kernels is None else kernels).resolve())
         try:
-            _cache_folder()                 # numba can cache here at all
-            groups = len(load_kernels(kernels))
+            folder = _cache_folder()                 # numba can cache here at all
+            listed = json.loads(Path(kernels).read_text())
+            tasks = listed["tasks"]
+            folder.mkdir(parents=True, exist_ok=True)
+            queue = folder / f"gongsynth-precompile-{os.getpid()}-{time.monotonic_ns()}.queue"
+            queue.write_bytes(bytes(len(tasks)))
         except Exception:
             return False
+        _queue[0], _kernels[0], _said[:] = queue, listed, [False, 0.0]
+        _started[0] = time.monotonic()
         package = str(Path(__file__).resolve().parent)
-        for group in range(groups if (os.cpu_count() or 1) > 1 else 1):
+        for worker in range(_workers()):
+            job = _fork(tasks, kernels, worker, queue) if worker and fork else None
             try:
-                _jobs.append(subprocess.Popen([sys.executable, "-c", _BOOT, package, kernels, str(group)],
-                                              stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                                              stderr=subprocess.DEVNULL))
+                _jobs.append(job or subprocess.Popen(
+                    [sys.executable, "-c", _BOOT, package, kernels, str(worker), str(queue)],
+                    stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
             except OSError:
                 break
-        _started[0] = time.monotonic()
         return bool(_jobs)
+
+
+class _Forked:
+    """A forked compiler, with the `subprocess.Popen` methods `wait` uses."""
+
+    def __init__(self, pid):
+        self.pid, self.returncode = pid, None
+
+    def poll(self):
+        if self.returncode is None:
+            try:
+                pid, status = os.waitpid(self.pid, os.WNOHANG)
+            except ChildProcessError:     # reaped elsewhere (SIGCHLD ignored): it has ended
+                pid, status = self.pid, 0
+            if pid:
+                self.returncode = os.waitstatus_to_exitcode(status)
+        return self.returncode
+
+    def wait(self, timeout=None):
+        end = None if timeout is None else time.monotonic() + timeout
+        while self.poll() is None:
+            if end is not None and time.monotonic() > end:
+                raise subprocess.TimeoutExpired(f"compiler {self.pid}", timeout)
+            time.sleep(_POLL)
+        return self.returncode
+
+    def kill(self):
+        try:
+            os.kill(self.pid, 9)
+        except OSError:
+            pass
+
+
+def _fork(tasks, kernels, worker, queue):
+    """A compiler forked from this process once it has imported the tasks' modules; None where it cannot."""
+    if not hasattr(os, "fork") or sys.platform != "linux" or threading.active_count() > 1:
+        return None
+    try:
+        import importlib
+
+        from numba.core.registry import cpu_target
+
+        for module in dict.fromkeys(task["module"] for task in tasks):
+            importlib.import_module(module)
+        cpu_target.target_context.refresh()      # numba's compiler set up: the run needs it too
+        cpu_target.typing_context.refresh()
+        pid = os.fork()
+    except Exception:
+        return None
+    if pid:
+        return _Forked(pid)
+    code = 1   # pragma: no cover - the child (coverage does not follow it)
+    try:       # pragma: no cover
+        null = os.open(os.devnull, os.O_RDWR)
+        for fd in (0, 1, 2):
+            os.dup2(null, fd)
+        code = _compile_here(kernels, worker, queue)
+    finally:   # pragma: no cover - never the run's own exit handlers
+        os._exit(code)
 
 
 def start_for_command(argv):
@@ -208,12 +314,18 @@ def start_for_command(argv):
         return False
 
 
-def wait(*, progress=True):
+def wait(stage=None, *, progress=True):
     """
-    Wait until this process's compilers have ended (at most until `TIMEOUT` after their start).
+    Wait until this process's compilers have ended, or have compiled what ``stage`` needs
+    (at most until `TIMEOUT` after their start).
 
     Parameters
     ----------
+    stage : str, optional
+        A stage of the chain (`gongsynth.chain.Stage.name`): wait only for the
+        tasks that the README's run needed up to that stage (`KERNELS` records
+        where each was needed first); not at all for a stage `KERNELS` does
+        not know.  None: wait for the compilers to end.
     progress : bool
         Log "compiling kernels (first run only)" (sunpy's logger, level INFO) when it waits.
 
@@ -223,25 +335,65 @@ def wait(*, progress=True):
         Seconds waited (0 without compilers).
     """
     with _lock:
-        jobs = list(_jobs)
-        _jobs.clear()
-    if not any(job.poll() is None for job in jobs):
+        jobs, queue, kernels = list(_jobs), _queue[0], _kernels[0]
+    if not jobs:
         return 0.0
-    if progress:
+    need = None
+    if stage is not None:
+        try:
+            stages = kernels["stages"]
+            if stage not in stages:
+                return 0.0
+            need = [n for n, task in enumerate(kernels["tasks"])
+                    if task["stage"] in stages[:stages.index(stage) + 1]]
+        except (TypeError, KeyError, ValueError):
+            return 0.0
+    began = time.monotonic()
+    logged = False
+    while any(job.poll() is None for job in jobs) and not _done(queue, need):
+        if progress and not _said[0]:
+            from sunpy import log
+
+            log.info("gongsynth: compiling kernels (first run only)")
+            _said[0] = logged = True
+        if time.monotonic() - _started[0] > TIMEOUT:
+            for job in jobs:
+                job.kill()
+            break
+        time.sleep(_POLL)
+    waited = time.monotonic() - began
+    _said[1] += waited
+    if need is None or not any(job.poll() is None for job in jobs):
+        with _lock:
+            for job in jobs:
+                job.wait()
+            _jobs.clear()
+            _queue[0] = None
+        try:
+            queue.unlink()
+        except OSError:
+            pass
+        if progress and _said[0]:
+            from sunpy import log
+
+            log.info(f"gongsynth: kernels compiled ({_said[1]:.0f} s waited)")
+    elif progress and logged:
         from sunpy import log
 
-        log.info("gongsynth: compiling kernels (first run only)")
-    began = time.monotonic()
-    for job in jobs:
-        try:
-            job.wait(max(TIMEOUT - (time.monotonic() - _started[0]), 0.0))
-        except subprocess.TimeoutExpired:
-            job.kill()
-            job.wait()
-    waited = time.monotonic() - began
-    if progress:
-        log.info(f"gongsynth: kernels compiled ({waited:.0f} s waited)")
+        log.info(f"gongsynth: the {stage} stage's kernels compiled ({waited:.0f} s waited)")
     return waited
+
+
+def _done(queue, need):
+    """Whether the tasks ``need`` (indices) are compiled (never for None: all compilers must end)."""
+    if need is None:
+        return False
+    try:
+        with open(queue, "rb") as file:
+            state = file.read()
+        return all(state[n] == _DONE for n in need)
+    except (OSError, IndexError):
+        return False
 
 
 def _argument_type(text):
@@ -256,30 +408,82 @@ def _argument_type(text):
     return types.boolean if text == "bool" else getattr(types, text)
 
 
-def _compile_here(kernels, group):
-    """A compiler process: compile group ``group`` of ``kernels``; the last to end writes the record."""
+def _compile_here(kernels, worker, queue):
+    """A compiler process: take tasks off the shared ``queue`` until none is left; record when whole."""
     import importlib
 
     folder = _cache_folder()
     folder.mkdir(parents=True, exist_ok=True)
-    groups = load_kernels(kernels)
-    mine = [entry for number, entry in enumerate(groups) if number == group]
-    if group == 0 and len(groups) > 1 and (os.cpu_count() or 1) == 1:
-        mine = groups          # one core: one compiler for all
+    tasks = load_kernels(kernels)
     failed = 0
-    with _turns(folder / f"gongsynth-precompile-{group}.lock"):
+    with _turns(folder / f"gongsynth-precompile-{worker}.lock"):   # held while it compiles
         if compiled(kernels):
             return 0
-        for entries in mine:
-            for module, name, argtypes in entries:
-                try:
-                    dispatcher = getattr(importlib.import_module(module), name)
+        while (number := _claim(queue, tasks, worker, folder)) is not None:
+            if number < 0:
+                time.sleep(_POLL)      # the other compiler's task is needed first
+                continue
+            task = tasks[number]
+            began = (time.time(), time.process_time())
+            try:
+                dispatcher = getattr(importlib.import_module(task["module"]), task["function"])
+                for argtypes in task["signatures"]:
                     dispatcher.compile(tuple(_argument_type(t) for t in argtypes))
-                except Exception:   # a stale entry: the run compiles that kernel itself
-                    failed += 1
+            except Exception:   # a stale entry: the run compiles that kernel itself
+                failed += 1
+            _set(queue, number, _DONE)
+            if os.environ.get(_LOG):
+                with open(os.environ[_LOG], "a") as log:
+                    log.write(f"{worker} {task['function']} {began[0]:.3f} {time.time():.3f} "
+                              f"{time.process_time() - began[1]:.3f}\n")
     with _turns(folder / "gongsynth-precompile.lock"):
-        _record(folder, kernels, groups)
+        _record(folder, kernels, tasks)
     return 1 if failed else 0
+
+
+def _claim(queue, tasks, worker, folder):
+    """
+    Claim the first free task whose callees are compiled; None when no task is free, -1 when the
+    free ones wait for the other compiler's tasks (or the first free one when that compiler has ended).
+    """
+    try:
+        with _turns(queue) as held:
+            state = bytearray(os.pread(held.file.fileno(), len(tasks), 0))
+            free = [n for n, s in enumerate(state) if s == _FREE]
+            if not free:
+                return None
+            ready = [n for n in free if all(state[c] == _DONE for c in tasks[n]["calls"])]
+            if not ready:
+                others = {state[c] - 1 for n in free for c in tasks[n]["calls"]
+                          if state[c] not in (_FREE, _DONE)}
+                if any(_alive(folder / f"gongsynth-precompile-{w}.lock") for w in others if w != worker):
+                    return -1
+            number = (ready or free)[0]
+            os.pwrite(held.file.fileno(), bytes([1 + worker]), number)
+            return number
+    except OSError:
+        return None
+
+
+def _set(queue, number, value):
+    """Write task ``number``'s state."""
+    try:
+        with _turns(queue) as held:
+            os.pwrite(held.file.fileno(), bytes([value]), number)
+    except OSError:
+        pass
+
+
+def _alive(path):
+    """Whether a compiler holds its lock ``path`` (a free lock: it has ended)."""
+    import fcntl
+
+    with open(path, "a") as file:
+        try:
+            fcntl.flock(file, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            return True
+        return False
 
 
 class _turns:
@@ -289,7 +493,7 @@ class _turns:
         self.path = path
 
     def __enter__(self):
-        self.file = open(self.path, "a")
+        self.file = open(self.path, "r+b" if str(self.path).endswith(".queue") else "a")
         try:
             import fcntl
 
@@ -302,22 +506,22 @@ class _turns:
         self.file.close()      # releases the lock
 
 
-def _record(folder, kernels, groups):
-    """Write `MANIFEST` when every kernel of ``groups`` has a numba cache index."""
+def _record(folder, kernels, tasks):
+    """Write `MANIFEST` when every task of ``tasks`` has a numba cache index."""
     import importlib
 
     import numba
 
     entries = []
-    for module, name, _ in (entry for entries in groups for entry in entries):
+    for task in tasks:
         try:
-            dispatcher = getattr(importlib.import_module(module), name)
+            dispatcher = getattr(importlib.import_module(task["module"]), task["function"])
             index = dispatcher._cache._cache_file._index_path
             source = dispatcher.py_func.__code__.co_filename
         except Exception:
             return
         if not os.path.exists(index):
-            return      # another group still compiles: it writes the record when it ends
+            return      # another compiler still works: it writes the record when it ends
         st = os.stat(source)
         entries.append((index, source, [st.st_mtime, st.st_size]))
     record = {"kernels": str(Path(kernels).resolve()), "python": list(sys.version_info[:2]),
