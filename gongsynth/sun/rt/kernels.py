@@ -31,8 +31,8 @@ below `VB_TAYLOR` Doppler widths (to the order the shift needs), and the scalar 
 w(z) and the σ series stay in float64 (the series' recurrence cancels in the
 wings); the absorption-matrix elements, Δτ, e^−Δτ, the DELO weights (from
 their series below Δτ = 0.3, where 1 − e^−Δτ would cancel in float32) and the
-4 × 4 recursion are float32, twice the SIMD width, within 1e-6 of the
-continuum of the float64 recursion (the output is float32 anyway).  The bottom
+4 × 4 recursion are float32, twice the SIMD width, within 2e-5 of the
+continuum of the float64 recursion (measured on the 3-D Sun's rays).  The bottom
 point's incoming intensity (diffusion approximation) is taken from the first
 step's Δτ, so the whole ray goes through the vectorised loops.  Its
 only fast-math flag is fused multiply-add, so it gives the same bits for any
