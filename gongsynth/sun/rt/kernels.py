@@ -554,8 +554,11 @@ def _solve_ray(dl, lam0, lande_g, core_index, ds, kc, kl, dop_k, aa, bb, vlos, b
             for j in range(nl):
                 ex[j] = _exp_neg(dt[j])
             for j in range(nl):
+                # e I + α S_c + β S_u as I + α (S_c − I) + β (S_u − I) (α + β = 1 − e): no rounding of an e
+                # near 1 (thin steps), which in float32 would accumulate along the ray.
                 e, al, be = _weights(dt[j], ex[j])
-                i0[j] = e * i0[j] + al * bc + be * bu
+                a0 = i0[j]
+                i0[j] = a0 + (al * (bc - a0) + be * (bu - a0))
             continue
         cq, cu, cv = _F(pt[6, k]), _F(pt[7, k]), _F(pt[8, k])
         if vb == 0.0:
