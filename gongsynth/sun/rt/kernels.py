@@ -166,30 +166,6 @@ def solve_columns_reference(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_al
     The first version of the solver, kept to check the fast one against: wavelength
     by wavelength, Humlíček's W4 for the π and both σ components at every point,
     the full 4 × 4 solve even where B = 0.  Same arguments as `solve_columns`.
-
-    Parameters
-    ----------
-    lam_cm : (nλ,) float64
-        Wavelengths (cm, the line's rest wavelength scale).
-    lam0 : float
-        Rest wavelength (cm).
-    lande_g : float
-        Effective Landé factor of the normal triplet.
-    core_index : int
-        Wavelength index whose optical depth is reported in ``log_tau_core``.
-    ds : (nz - 1,) float64
-        Path length between consecutive ray points (cm), bottom to top.
-    kc_all, kl_all, dop_all, damp_all, src_all : (ncol, nz) float64
-        Continuum opacity and line-centre opacity scale (cm⁻¹), Doppler width
-        (cm), damping and source function (see
-        `~gongsynth.sun.rt.opacity.column_opacity`); points ordered bottom to top.
-    vlos, bpar, b1, b2 : (ncol, nz) float64
-        Velocity along the ray (cm/s, > 0 away from the observer) and the field
-        along the line of sight and the sky axes e1, e2 (G).
-    out_i, out_q, out_u, out_v : (ncol, nλ) float32
-        Filled with the emergent spectra (units of the source function).
-    log_tau_c, log_tau_core : (ncol, nz) float32
-        Filled with log10 of the continuum and ``core_index`` optical depth along the ray.
     """
     run_chunks(_reference_rays, kc_all.shape[0], lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all,
                dop_all, damp_all, src_all, vlos, bpar, b1, b2, out_i, out_q, out_u, out_v, log_tau_c,
