@@ -27,7 +27,14 @@ advances all wavelengths together point by point in loops the compiler
 vectorises, takes w(z) in W4's regions as contiguous runs of wavelengths
 (`_w_vec`: a Taylor table where Humlíček's W4 is slow, more accurate than W4
 there), the σ profiles from the Taylor series in the Zeeman shift when it is
-below `VB_TAYLOR` Doppler widths (to the order the shift needs), and the scalar solve on rays with B = 0; its
+below `VB_TAYLOR` Doppler widths (to the order the shift needs), and the scalar solve on rays with B = 0.
+w(z) and the σ series stay in float64 (the series' recurrence cancels in the
+wings); the absorption-matrix elements, Δτ, e^−Δτ, the DELO weights (from
+their series below Δτ = 0.3, where 1 − e^−Δτ would cancel in float32) and the
+4 × 4 recursion are float32, twice the SIMD width, within 2e-5 of the
+continuum of the float64 recursion (measured on the 3-D Sun's rays).  The bottom
+point's incoming intensity (diffusion approximation) is taken from the first
+step's Δτ, so the whole ray goes through the vectorised loops.  Its
 only fast-math flag is fused multiply-add, so it gives the same bits for any
 block size and thread count.  `solve_columns_reference` is the first, simple implementation of
 the same equations, kept to test and benchmark the fast one against.
@@ -101,8 +108,12 @@ def _elements(vj, k, kc, kl, dop, a, vs, vb, cg, fq, fu):
 
 
 @nb.njit(cache=True, inline="always")
-def _solve4(q, u, v, rq, ru, rv, al, b0, b1, b2, b3):
-    """Solve (1 + al K') x = b for the LL04 structure of K' (Gaussian elimination, no pivoting)."""
+def _solve4(q, u, v, rq, ru, rv, al, b0, b1, b2, b3, one=1.0):
+    """
+    Solve (1 + al K') x = b for the LL04 structure of K' (Gaussian elimination, no pivoting).
+
+    ``one``: 1 in the arithmetic's precision (`numpy.float32` keeps a float32 solve in float32).
+    """
     m01 = al * q
     m02 = al * u
     m03 = al * v
@@ -115,19 +126,19 @@ def _solve4(q, u, v, rq, ru, rv, al, b0, b1, b2, b3):
     m30 = m03
     m31 = -m13
     m32 = -m23
-    m11 = 1.0 - m10 * m01
+    m11 = one - m10 * m01
     m12 -= m10 * m02
     m13 -= m10 * m03
     b1 -= m10 * b0
     m21 -= m20 * m01
-    m22 = 1.0 - m20 * m02
+    m22 = one - m20 * m02
     m23 -= m20 * m03
     b2 -= m20 * b0
     m31 -= m30 * m01
     m32 -= m30 * m02
-    m33 = 1.0 - m30 * m03
+    m33 = one - m30 * m03
     b3 -= m30 * b0
-    p1 = 1.0 / m11
+    p1 = one / m11
     f = m21 * p1
     m22 -= f * m12
     m23 -= f * m13
@@ -136,7 +147,7 @@ def _solve4(q, u, v, rq, ru, rv, al, b0, b1, b2, b3):
     m32 -= f * m12
     m33 -= f * m13
     b3 -= f * b1
-    p2 = 1.0 / m22
+    p2 = one / m22
     f = m32 * p2
     m33 -= f * m23
     b3 -= f * b2
@@ -155,30 +166,6 @@ def solve_columns_reference(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_al
     The first version of the solver, kept to check the fast one against: wavelength
     by wavelength, Humlíček's W4 for the π and both σ components at every point,
     the full 4 × 4 solve even where B = 0.  Same arguments as `solve_columns`.
-
-    Parameters
-    ----------
-    lam_cm : (nλ,) float64
-        Wavelengths (cm, the line's rest wavelength scale).
-    lam0 : float
-        Rest wavelength (cm).
-    lande_g : float
-        Effective Landé factor of the normal triplet.
-    core_index : int
-        Wavelength index whose optical depth is reported in ``log_tau_core``.
-    ds : (nz - 1,) float64
-        Path length between consecutive ray points (cm), bottom to top.
-    kc_all, kl_all, dop_all, damp_all, src_all : (ncol, nz) float64
-        Continuum opacity and line-centre opacity scale (cm⁻¹), Doppler width
-        (cm), damping and source function (see
-        `~gongsynth.sun.rt.opacity.column_opacity`); points ordered bottom to top.
-    vlos, bpar, b1, b2 : (ncol, nz) float64
-        Velocity along the ray (cm/s, > 0 away from the observer) and the field
-        along the line of sight and the sky axes e1, e2 (G).
-    out_i, out_q, out_u, out_v : (ncol, nλ) float32
-        Filled with the emergent spectra (units of the source function).
-    log_tau_c, log_tau_core : (ncol, nz) float32
-        Filled with log10 of the continuum and ``core_index`` optical depth along the ray.
     """
     run_chunks(_reference_rays, kc_all.shape[0], lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all,
                dop_all, damp_all, src_all, vlos, bpar, b1, b2, out_i, out_q, out_u, out_v, log_tau_c,
@@ -336,48 +323,81 @@ def _w_vec(dl, rd, shift, y, xs, wr, wi):
         wr[j], wi[j] = w_region1(xs[j], y)
 
 
-_EXP2_NEG = np.ldexp(1.0, -np.arange(1080))          # 2⁻ⁿ
-_EXP_TAYLOR = np.array([(-1.0) ** n / math.factorial(n) for n in range(16)])
+_F = np.float32
+#: 2⁻ⁿ in float32 (n ≤ 126, the normal range) and 0 for n = 127: e^(−t) of `_exp_neg` underflows to 0.
+_EXP2_NEG = np.append(np.ldexp(_F(1.0), -np.arange(127)), 0.0).astype(_F)
+_EXP_TAYLOR = tuple(_F((-1.0) ** n / math.factorial(n)) for n in range(10))
+_ZERO, _HALF, _ONE = _F(0.0), _F(0.5), _F(1.0)
+_T_MAX = _F(89.0)                                  # e^(−t) < 2⁻¹²⁷ beyond: the table's 0
+_LOG2E, _LN2_HI, _LN2_LO = _F(1.4426950408889634), _F(0.693145751953125), _F(1.4286068203094172e-06)
+#: Optical-depth step below which the DELO weights come from their series (no cancellation in float32).
+_DT_SERIES = _F(0.3)
+# Series coefficients: w0 = 1 − e^(−Δτ) = Σ (−1)ⁿ⁺¹ Δτⁿ/n!, w1/Δτ = (1 − e^(−Δτ) − Δτ e^(−Δτ))/Δτ =
+# Σ_{n≥2} (−1)ⁿ (n − 1) Δτⁿ⁻¹/n!, in float32 up to Δτ⁸ (relative error < 1e-8 at Δτ = 0.3).
+_W0_SERIES = tuple(_F((-1.0) ** (n + 1) / math.factorial(n)) for n in range(1, 10))
+_BETA_SERIES = tuple(_F((-1.0) ** n * (n - 1) / math.factorial(n)) for n in range(2, 11))
 
 
 @nb.njit(cache=True, inline="always")
 def _exp_neg(t):
-    """e^(−t), t ≥ 0, without a library call (vectorisable): 2^(−n) e^(−r), r ∈ [0, ln 2), Taylor to r¹⁵."""
-    t = min(max(t, 0.0), 746.0)                         # e^(-t) = 0 in float64 beyond 745.2
-    n = min(max(int(t * 1.4426950408889634), 0), 1079)   # in the table whatever t is (NaN included)
-    r = (t - n * 0.6931471803691238) - n * 1.9082149292705877e-10
-    p = _EXP_TAYLOR[15]
-    for m in range(14, -1, -1):
+    """
+    e^(−t), t ≥ 0, in float32 without a library call (vectorisable): 2^(−n) e^(−r), r ∈ [0, ln 2),
+    Taylor to r⁹ (relative error < 2e-7); 0 beyond t = 88 (float32 underflow), finite for any t.
+    """
+    t = min(max(t, _ZERO), _T_MAX)
+    n = min(max(int(t * _LOG2E), 0), 127)               # in the table whatever t is (NaN included)
+    fn = _F(n)
+    r = (t - fn * _LN2_HI) - fn * _LN2_LO
+    p = _EXP_TAYLOR[9]
+    for m in range(8, -1, -1):
         p = p * r + _EXP_TAYLOR[m]
     return p * _EXP2_NEG[n]
 
 
 @nb.njit(cache=True, inline="always")
 def _weights(dt, ex):
-    """`_delo_weights` with exp(-dt) given (branch-free for vectorisation)."""
-    w0s = dt * (1.0 - dt * (0.5 - dt / 6.0))
-    w1s = dt * dt * (0.5 - dt * (1.0 / 3.0 - dt * 0.125))
-    small = dt < 1e-3
-    e = 1.0 - w0s if small else ex
-    w0 = w0s if small else 1.0 - ex
-    w1 = w1s if small else w0 - dt * ex
-    beta = w1 / dt
+    """
+    `_delo_weights` in float32 with e^(−Δτ) given: (e, α, β), branch-free for vectorisation.
+
+    Below `_DT_SERIES` w0 and β come from their series, where 1 − e and w0 − Δτ e would cancel.
+    """
+    p = _W0_SERIES[8]
+    q = _BETA_SERIES[8]
+    for m in range(7, -1, -1):
+        p = p * dt + _W0_SERIES[m]
+        q = q * dt + _BETA_SERIES[m]
+    w0s = p * dt
+    bes = q * dt
+    small = dt < _DT_SERIES
+    w0 = w0s if small else _ONE - ex
+    e = _ONE - w0s if small else ex
+    beta = bes if small else (w0 - dt * ex) / dt
     return e, w0 - beta, beta
+
+
+@nb.njit(cache=True, inline="always")
+def _diffusion(i0, i1, i2, i3, dt, bu, bc):
+    """The incoming I at the bottom point by the diffusion approximation, B + dB/dτ (Q = U = V = 0)."""
+    for j in range(i0.size):
+        i0[j] = bu + (bu - bc) / dt[j]
+        i1[j] = i2[j] = i3[j] = _ZERO
 
 
 @nb.njit(cache=True, error_model="numpy", fastmath=_CONTRACT)
 def _step(i0, i1, i2, i3, eu, ec, dt, ex, bu, bc):
-    """One DELO-linear step of all wavelengths (4 × 4 solve; a loop the compiler vectorises)."""
+    """One DELO-linear step of all wavelengths in float32 (4 × 4 solve; a loop the compiler vectorises)."""
     for j in range(i0.size):
         e, al, be = _weights(dt[j], ex[j])
         a0, a1, a2, a3 = i0[j], i1[j], i2[j], i3[j]
         u1, u2, u3, u4, u5, u6 = eu[1, j], eu[2, j], eu[3, j], eu[4, j], eu[5, j], eu[6, j]
-        y0 = e * a0 - be * (u1 * a1 + u2 * a2 + u3 * a3) + al * bc + be * bu
-        y1 = e * a1 - be * (u1 * a0 + u6 * a2 - u5 * a3) + al * bc * ec[1, j] + be * bu * u1
-        y2 = e * a2 - be * (u2 * a0 - u6 * a1 + u4 * a3) + al * bc * ec[2, j] + be * bu * u2
-        y3 = e * a3 - be * (u3 * a0 + u5 * a1 - u4 * a2) + al * bc * ec[3, j] + be * bu * u3
+        sc = al * bc
+        su = be * bu
+        y0 = e * a0 - be * (u1 * a1 + u2 * a2 + u3 * a3) + sc + su
+        y1 = e * a1 - be * (u1 * a0 + u6 * a2 - u5 * a3) + sc * ec[1, j] + su * u1
+        y2 = e * a2 - be * (u2 * a0 - u6 * a1 + u4 * a3) + sc * ec[2, j] + su * u2
+        y3 = e * a3 - be * (u3 * a0 + u5 * a1 - u4 * a2) + sc * ec[3, j] + su * u3
         i0[j], i1[j], i2[j], i3[j] = _solve4(ec[1, j], ec[2, j], ec[3, j], ec[4, j], ec[5, j], ec[6, j], al,
-                                             y0, y1, y2, y3)
+                                             y0, y1, y2, y3, _ONE)
 
 
 def solve_columns(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all, damp_all, src_all, vlos,
@@ -443,28 +463,6 @@ def _solve_ray(dl, lam0, lande_g, core_index, ds, kc, kl, dop_k, aa, bb, vlos, b
     """One ray of `solve_columns` (its arguments for that ray; ``dl`` = λ − λ₀)."""
     nz = kc.size
     nl = dl.size
-    pt = np.empty((9, nz))        # 1/Δλ_D, v_los, v_B, κ_L/2, 1 - cos²γ, 1 + cos²γ, cos 2χ, sin 2χ, cos γ
-    kmax = np.empty(nz)
-    magnetic = np.zeros(nz, dtype=np.bool_)
-    for k in range(nz):
-        dop = dop_k[k]
-        kmax[k] = kc[k] + kl[k]
-        pt[0, k] = 1.0 / dop
-        pt[1, k] = lam0 * vlos[k] / _C / dop
-        pt[3, k] = 0.5 * kl[k]
-        bz, bx, by = bpar[k], b1[k], b2[k]
-        b2sum = bz * bz + bx * bx + by * by
-        cg = 1.0
-        pt[2, k] = pt[6, k] = pt[7, k] = 0.0
-        if b2sum > 0.0:
-            magnetic[k] = True
-            pt[2, k] = ZEEMAN_CM_PER_G * lam0 * lam0 * lande_g * math.sqrt(b2sum) / dop
-            cg = bz / math.sqrt(b2sum)
-            pt[6, k] = (bx * bx - by * by) / b2sum
-            pt[7, k] = 2.0 * bx * by / b2sum
-        pt[4, k] = 1.0 - cg * cg
-        pt[5, k] = 1.0 + cg * cg
-        pt[8, k] = cg
     tc = 0.0
     tm = 0.0
     log_tau_c[nz - 1] = -12.0
@@ -472,7 +470,7 @@ def _solve_ray(dl, lam0, lande_g, core_index, ds, kc, kl, dop_k, aa, bb, vlos, b
     ktop = nz - 1
     for k in range(nz - 2, -1, -1):
         tc += 0.5 * (kc[k] + kc[k + 1]) * ds[k]
-        tm += 0.5 * (kmax[k] + kmax[k + 1]) * ds[k]
+        tm += 0.5 * ((kc[k] + kl[k]) + (kc[k + 1] + kl[k + 1])) * ds[k]
         log_tau_c[k] = math.log10(max(tc, 1e-12))
         if tm <= TAU_TOP:
             ktop = k
@@ -480,43 +478,65 @@ def _solve_ray(dl, lam0, lande_g, core_index, ds, kc, kl, dop_k, aa, bb, vlos, b
             kbot = k
     kbot = max(kbot - 1, 0)
     ktop = max(ktop, kbot + 1)
-    polar = magnetic[kbot:ktop + 1].any()
-    wk = np.zeros((16, nl))
-    i0, i1, i2, i3, pr0, pr1 = wk[0], wk[1], wk[2], wk[3], wk[4], wk[5]
-    pr2, pr3, pr4, pr5, dt, ex = wk[6], wk[7], wk[8], wk[9], wk[10], wk[11]
-    xs, xb, wbr, wbi = wk[12], wk[13], wk[14], wk[15]
+    # The points' parameters, only where they are used: the integrated points (and all for the core's τ).
+    lo, hi = (0, nz) if core_index >= 0 else (kbot, ktop + 1)
+    pt = np.zeros((9, nz))        # 1/Δλ_D, v_los, v_B, κ_L/2, 1 - cos²γ, 1 + cos²γ, cos 2χ, sin 2χ, cos γ
+    polar = False
+    for k in range(lo, hi):
+        dop = dop_k[k]
+        pt[0, k] = 1.0 / dop
+        pt[1, k] = lam0 * vlos[k] / _C / dop
+        pt[3, k] = 0.5 * kl[k]
+        bz, bx, by = bpar[k], b1[k], b2[k]
+        b2sum = bz * bz + bx * bx + by * by
+        cg = 1.0
+        if b2sum > 0.0:
+            polar |= kbot <= k <= ktop
+            bb_ = math.sqrt(b2sum)
+            rb2 = 1.0 / b2sum
+            pt[2, k] = ZEEMAN_CM_PER_G * lam0 * lam0 * lande_g * bb_ / dop
+            cg = bz / bb_
+            pt[6, k] = (bx * bx - by * by) * rb2
+            pt[7, k] = 2.0 * bx * by * rb2
+        pt[4, k] = 1.0 - cg * cg
+        pt[5, k] = 1.0 + cg * cg
+        pt[8, k] = cg
+    wk = np.zeros((9, nl))
+    pr0, pr1, pr2, pr3, pr4, pr5, xs, wbr, wbi = wk[0], wk[1], wk[2], wk[3], wk[4], wk[5], wk[6], wk[7], wk[8]
     sw = np.empty((4, nl))        # scratch of sigma_taylor_vec
-    eu = np.empty((7, nl))        # elements at the point below
-    ec = np.empty((7, nl))        # and at the current point
-    k = kbot
-    for j in range(nl):
-        e1 = _fast_elements(dl[j] * pt[0, k] - pt[1, k], aa[k], pt[2, k], kc[k], pt[3, k], pt[4, k],
-                            pt[5, k], pt[6, k], pt[7, k], pt[8, k])
-        en = _fast_elements(dl[j] * pt[0, k + 1] - pt[1, k + 1], aa[k + 1], pt[2, k + 1], kc[k + 1],
-                            pt[3, k + 1], pt[4, k + 1], pt[5, k + 1], pt[6, k + 1], pt[7, k + 1],
-                            pt[8, k + 1])
-        i0[j] = bb[k] + (bb[k] - bb[k + 1]) / (0.5 * (e1[0] + en[0]) * ds[k])
-        eu[0, j], eu[1, j], eu[2, j], eu[3, j], eu[4, j], eu[5, j], eu[6, j] = e1
-    for k in range(kbot + 1, ktop + 1):
-        dsk = ds[k - 1]
-        bu = bb[k - 1]
-        bc = bb[k]
-        rd, vs, vb, h, c1, c2 = pt[0, k], pt[1, k], pt[2, k], pt[3, k], pt[4, k], pt[5, k]
-        ak = aa[k]
-        kck = kc[k]
+    # The DELO recursion and the absorption matrix in float32 (see the module docstring).
+    wf = np.zeros((20, nl), dtype=np.float32)
+    i0, i1, i2, i3, dt, ex = wf[0], wf[1], wf[2], wf[3], wf[4], wf[5]
+    eu = wf[6:13]                 # elements at the point below
+    ec = wf[13:20]                # and at the current point
+    # The bottom point only gives the elements (eu); each later one a step from the point below.
+    for k in range(kbot, ktop + 1):
+        first = k == kbot
+        dsk = _F(0.5 * ds[k - 1]) if not first else _ZERO
+        bu = _F(bb[k - 1])
+        bc = _F(bb[k])
+        rd, vs, vb, ak = pt[0, k], pt[1, k], pt[2, k], aa[k]
+        h, c1, c2, kck = _F(pt[3, k]), _F(pt[4, k]), _F(pt[5, k]), _F(kc[k])
         _w_vec(dl, rd, vs, ak, xs, pr0, pr1)
         if not polar:
             for j in range(nl):
-                ei = kck + h * (pr0[j] * c1 + pr0[j] * c2)
-                dt[j] = 0.5 * (eu[0, j] + ei) * dsk
+                ei = kck + h * (_F(pr0[j]) * (c1 + c2))
+                dt[j] = (eu[0, j] + ei) * dsk
                 eu[0, j] = ei
+            if first:
+                continue
+            if k == kbot + 1:
+                _diffusion(i0, i1, i2, i3, dt, bu, bc)
             for j in range(nl):
                 ex[j] = _exp_neg(dt[j])
             for j in range(nl):
+                # e I + α S_c + β S_u as I + α (S_c − I) + β (S_u − I) (α + β = 1 − e): no rounding of an e
+                # near 1 (thin steps), which in float32 would accumulate along the ray.
                 e, al, be = _weights(dt[j], ex[j])
-                i0[j] = e * i0[j] + al * bc + be * bu
+                a0 = i0[j]
+                i0[j] = a0 + (al * (bc - a0) + be * (bu - a0))
             continue
-        cq, cu, cv = pt[6, k], pt[7, k], pt[8, k]
+        cq, cu, cv = _F(pt[6, k]), _F(pt[7, k]), _F(pt[8, k])
         if vb == 0.0:
             for j in range(nl):
                 pr2[j] = pr0[j]
@@ -526,8 +546,8 @@ def _solve_ray(dl, lam0, lande_g, core_index, ds, kc, kl, dop_k, aa, bb, vlos, b
         elif vb <= VB_TAYLOR and ak <= TABLE_YMAX:
             sigma_taylor_vec(xs, ak, vb, pr0, pr1, pr2, pr3, pr4, pr5, sw)
         else:
-            _w_vec(dl, rd, vs - vb, ak, xb, pr2, pr3)            # w(x + vb)
-            _w_vec(dl, rd, vs + vb, ak, xb, wbr, wbi)            # w(x − vb)
+            _w_vec(dl, rd, vs - vb, ak, pr4, pr2, pr3)           # w(x + vb)
+            _w_vec(dl, rd, vs + vb, ak, pr4, wbr, wbi)           # w(x − vb)
             for j in range(nl):
                 hb, fb = pr2[j], pr3[j]
                 pr2[j] = 0.5 * (hb + wbr[j])
@@ -535,21 +555,25 @@ def _solve_ray(dl, lam0, lande_g, core_index, ds, kc, kl, dop_k, aa, bb, vlos, b
                 pr4[j] = wbr[j] - hb
                 pr5[j] = wbi[j] - fb
         for j in range(nl):
-            ei = kck + h * (pr0[j] * c1 + pr2[j] * c2)
+            hp, fp, hs = _F(pr0[j]), _F(pr1[j]), _F(pr2[j])
+            ei = kck + h * (hp * c1 + hs * c2)
             g = h / ei
-            t = g * (pr0[j] - pr2[j])
-            r = g * (pr1[j] - pr3[j])
+            t = g * (hp - hs)
+            r = g * (fp - _F(pr3[j]))
             ec[0, j] = ei
             ec[1, j] = t * cq
             ec[2, j] = t * cu
-            ec[3, j] = g * pr4[j] * cv
+            ec[3, j] = g * _F(pr4[j]) * cv
             ec[4, j] = r * cq
             ec[5, j] = r * cu
-            ec[6, j] = g * pr5[j] * cv
-            dt[j] = 0.5 * (eu[0, j] + ei) * dsk
-        for j in range(nl):
-            ex[j] = _exp_neg(dt[j])
-        _step(i0, i1, i2, i3, eu, ec, dt, ex, bu, bc)
+            ec[6, j] = g * _F(pr5[j]) * cv
+            dt[j] = (eu[0, j] + ei) * dsk
+        if not first:
+            if k == kbot + 1:
+                _diffusion(i0, i1, i2, i3, dt, bu, bc)
+            for j in range(nl):
+                ex[j] = _exp_neg(dt[j])
+            _step(i0, i1, i2, i3, eu, ec, dt, ex, bu, bc)
         eu, ec = ec, eu
     for j in range(nl):
         out_i[j] = i0[j]
