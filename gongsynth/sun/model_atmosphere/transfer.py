@@ -24,7 +24,7 @@ from gongsynth.geometry import check_geometry
 from gongsynth.sun.model_atmosphere.assembly import ModelSun
 from gongsynth.sun.rt import synthesis as rt_synthesis
 from gongsynth.sun.rt.atomic_data import get_line
-from gongsynth.sun.rt.rays import ray_offsets
+from gongsynth.sun.rt.rays import ray_offsets, rays_are_vertical
 from gongsynth.sun.stokes import DeferredCube, StokesCube
 from gongsynth.validation import check_wavelength_grid
 
@@ -84,6 +84,8 @@ class DeferredTransfer(DeferredCube):
             raise ValueError("DeferredTransfer takes one viewing geometry (scalar mu and azimuth)")
         self._sun = sun
         self._mu, self._az, self._azimuth = float(mu_value), float(az), azimuth
+        # As rt.synthesize decides: rays nearly vertical across the box are read as columns.
+        self._vertical = rays_are_vertical(sun.z.to_value(u.km), self._mu, sun.pixel_size.to_value(u.km))
         self._line = get_line(line)
         self._progress = progress
         if wavelength is None:
@@ -132,7 +134,7 @@ class DeferredTransfer(DeferredCube):
     def _reference_height(self):
         """The whole box's `reference_height`, from the same columns, assembled alone (nan: vertical rays)."""
         _, ny, nx = self._sun.shape
-        if self._mu >= 1:
+        if self._vertical:
             return float("nan")
         step = max(1, int(np.ceil(np.sqrt(ny * nx / _REFERENCE_COLUMNS))))
         sample = self._sun.rows(np.arange(0, ny, step), thermodynamics_only=True)[:, ::step]
@@ -141,7 +143,7 @@ class DeferredTransfer(DeferredCube):
 
     def _halo(self, z_ref):
         """Rows below and above a block that its rays reach (`gongsynth.sun.rt.rays.sample_rays`)."""
-        if not self._mu < 1:
+        if self._vertical:
             return 0, 0
         _, dy = ray_offsets(self._sun.z.to_value(u.km), z_ref, self._mu, self._az,
                             self._sun.pixel_size.to_value(u.km))

@@ -20,7 +20,7 @@ from gongsynth.sun.rt.atomic_data import get_line
 from gongsynth.sun.rt.eos import solve_state
 from gongsynth.sun.rt.kernels import solve_columns
 from gongsynth.sun.rt.opacity import column_opacity, line_constants, tabulated_opacity
-from gongsynth.sun.rt.rays import ray_offsets, sample_rays
+from gongsynth.sun.rt.rays import ray_offsets, rays_are_vertical, sample_rays
 from gongsynth.sun.rt.truth import los_field_at_depth, truth_definition
 from gongsynth.sun.stokes import RADIANCE_UNIT, StokesCube
 from gongsynth.validation import check_wavelength_grid
@@ -215,7 +215,8 @@ def synthesize(atmosphere, *, mu=1.0, azimuth=0 * u.deg, wavelength=None, truth=
     const, pf = line_constants(line)
     nz, ny, nx = atmosphere.shape
     z_km = atmosphere.z.to_value(u.km)
-    inclined = mu_value < 1 and rays == "inclined"
+    pixel_km = atmosphere.pixel_size.to_value(u.km)
+    inclined = rays == "inclined" and not rays_are_vertical(z_km, mu_value, pixel_km)
     if not inclined:
         z_ref = float("nan")
     elif anchor_height is None:
