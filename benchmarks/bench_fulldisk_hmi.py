@@ -63,7 +63,7 @@ CODE = textwrap.dedent("""
     fft_start = time.perf_counter()
     scipy.fft.rfft2(plane, workers=2)
     fft_s = time.perf_counter() - fft_start
-    stack_GB = result.expected_counts.shape[0] * int(sys.argv[2])**2 * 8 / 2**30
+    stack_GB = len(result.raw.frames_per_plane) * int(sys.argv[2])**2 * 8 / 2**30
     print(json.dumps({"wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
                       "stages_s": {k: round(v, 1) for k, v in result.timings.items()},
                       "stage_cpu_s": {k: round(v, 1) for k, v in stage_cpu.items()},

@@ -343,7 +343,10 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
     def optics_stage(light, truth_scene):
         counts, truth, truth_psf = optics.image_scene(light, truth_scene, inst, psf=effects.psf,
                                                       seeing=effects.seeing, workers=config.workers)
-        return {"expected_counts": counts, "truth": truth, "truth_psf": truth_psf}
+        # The pixels no line is measured in, from the noise-free counts: made here, so that the
+        # counts (12 × 4096² for a full-disk HMI run) can go once the camera has drawn from them.
+        sky = unmeasured(counts, config, instrument=inst, obstime=pointing.obstime)
+        return {"expected_counts": counts, "truth": truth, "truth_psf": truth_psf, "sky": sky}
 
     def camera(expected_counts):
         # GONG reduces every minute (minute_average); each plane sees its own image motion (frame_seeing).
@@ -376,15 +379,15 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
                 raws[-1] = dataclasses.replace(raws[-1], flat=raws[0].flat, dark=raws[0].dark)
         return {"raw": raws[0] if minutes == 1 else sum_planes(raws), "raw_minutes": raws}
 
-    def reduction(raw, raw_minutes, expected_counts):
-        observables = reduce(raw, inst)
+    def reduction(raw, raw_minutes):
+        observables = reduce(raw, inst, workers=config.workers)
         if len(raw_minutes) > 1:
-            observables = average_observables((reduce(r, inst) for r in raw_minutes), observables)
+            observables = average_observables((reduce(r, inst, workers=config.workers) for r in raw_minutes),
+                                              observables)
         if _rotates(effects, inst):
             # The same linear interpolation every minute: turning the average is turning each minute.
             observables = from_camera(observables, inst)
-        return {"observables": observables,
-                "sky": unmeasured(expected_counts, config, instrument=inst, obstime=pointing.obstime)}
+        return {"observables": observables}
 
     def maps(observables, sky, truth, truth_psf, light):
         made = {"magnetogram": observables.magnetogram, "doppler": observables.doppler,
@@ -399,12 +402,13 @@ def build_chain(config, *, stokes=None, flat=None, dark=None, progress=False, su
                 duration=config.duration, extra=header)
         return products
 
-    stages.append(Stage("optics", ("light", "truth_scene"), ("expected_counts", "truth", "truth_psf"),
-                        optics_stage, "PSF (aperture and seeing), resampling and binning to pixels"))
+    stages.append(Stage("optics", ("light", "truth_scene"), ("expected_counts", "truth", "truth_psf", "sky"),
+                        optics_stage, "PSF (aperture and seeing), resampling and binning to pixels; "
+                        "the pixels without a measurable line"))
     stages.append(Stage("camera", ("expected_counts",), ("raw", "raw_minutes"), camera,
                         "frame seeing, frames, flat, dark, photon and read noise, dither, truncation "
                         "(minute by minute)"))
-    stages.append(Stage("reduction", ("raw", "raw_minutes", "expected_counts"), ("observables", "sky"),
+    stages.append(Stage("reduction", ("raw", "raw_minutes"), ("observables",),
                         reduction, "dark, flat, the instrument's algorithm: Doppler, B_LOS, continuum "
                         "(minutes averaged)"))
     stages.append(Stage("maps", ("observables", "sky", "truth", "truth_psf", "light"),

@@ -26,9 +26,10 @@ from gongsynth.version import version as __version__
 __all__ = ["SimulationResult", "Sweep", "simulate", "simulate_many", "simulate_each", "check_scene",
            "record_input_file"]
 
-# What a SimulationResult is made of: the chain releases every other quantity once used.
+# What a SimulationResult is made of: the chain releases every other quantity once used (the
+# expected counts too, a diagnostic made again on demand: 0.8 GB for a full-disk HMI run).
 _RESULT_STATE = ("magnetogram_map", "doppler_map", "continuum_map", "truth_map", "truth_psf_map", "raw",
-                 "expected_counts", "light")
+                 "light")
 
 @dataclass
 class SimulationResult:
@@ -50,7 +51,10 @@ class SimulationResult:
     raw : `~gongsynth.stages.camera.integrate.RawPlanes`
         The instrument's K accumulated raw planes (GONG: six).
     expected_counts : `~astropy.units.Quantity`
-        Expected electrons per frame per pixel, shape (K, ny, nx), before noise.
+        Expected electrons per frame per pixel, shape (K, ny, nx), before noise: a diagnostic,
+        not held by the run (12 × 4096² values for a full-disk HMI run) but made again from
+        ``chain`` on first access (the stages up to the optics, deterministic: the same
+        numbers), then kept.
     resolution_map : `numpy.ndarray`
         Tile magnification of each detector pixel (1 = the instrument's resolution).
     config : `~gongsynth.config.SimulationConfig`
@@ -67,11 +71,19 @@ class SimulationResult:
     truth: object
     truth_psf: object
     raw: object
-    expected_counts: u.Quantity
     resolution_map: np.ndarray
     config: SimulationConfig
     timings: dict = field(default_factory=dict)
     chain: object = None
+    _expected_counts: object = field(default=None, repr=False)
+
+    @property
+    def expected_counts(self):
+        """The expected electrons per frame (K, ny, nx), made again by the chain on first access."""
+        if self._expected_counts is None and self.chain is not None:
+            state = self.chain.run(until="optics", progress=False, keep=("expected_counts",))
+            self._expected_counts = state["expected_counts"]
+        return self._expected_counts
 
     def summary(self):
         """
@@ -280,8 +292,8 @@ def simulate(stokes=None, *, latitude=0 * u.deg, duration=None, engine="blocks",
     return SimulationResult(
         magnetogram=state["magnetogram_map"], doppler=state["doppler_map"],
         continuum=state["continuum_map"], truth=state["truth_map"], truth_psf=state["truth_psf_map"],
-        raw=state["raw"], expected_counts=state["expected_counts"],
-        resolution_map=state["light"].resolution_map(), config=config, timings=timings, chain=chain)
+        raw=state["raw"], resolution_map=state["light"].resolution_map(), config=config, timings=timings,
+        chain=chain)
 
 
 def check_scene(config, stokes=None):

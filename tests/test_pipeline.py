@@ -418,3 +418,15 @@ def test_streamed_chain_equals_the_reference_path():
     assert np.max(np.abs(state["truth_psf"].to_value(u.G) - reference(blos))) < 0.01
     assert np.max(np.abs(state["truth"].to_value(u.G) - pixelize(blos, light.pixel_scale,
                                                                  instrument=inst))) < 0.01
+
+
+def test_expected_counts_are_a_diagnostic_made_on_demand(disk_centre):
+    """The run does not hold the expected counts (0.8 GB for a full-disk HMI run) nor needs them after
+    the camera; asking the result for them reruns the chain to the optics: the run's own numbers."""
+    chain = disk_centre.chain
+    assert "expected_counts" not in chain["reduction"].inputs and "sky" in chain["optics"].outputs
+    result = dataclasses.replace(disk_centre, _expected_counts=None)   # counts never asked for
+    want = build_chain(disk_centre.config).run(until="optics", progress=False)["expected_counts"]
+    got = result.expected_counts
+    assert got.unit == u.electron and got is result.expected_counts  # made once, then kept
+    np.testing.assert_array_equal(got.value, want.value)

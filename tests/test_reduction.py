@@ -102,7 +102,8 @@ def test_bad_input():
 @pytest.mark.parametrize("name", ["gong", "hmi"])
 def test_bands_of_rows_give_the_same_bits(name):
     """The reduction works pixel by pixel: a frame reduced a band of rows at a time (bounded memory),
-    whatever the band, has the same bits as reduced whole; so has the camera's output for any chunk."""
+    whatever the band and the threads reducing bands, has the same bits as reduced whole; so has the
+    camera's output for any chunk."""
     import dataclasses
 
     from gongsynth import instruments
@@ -114,8 +115,8 @@ def test_bands_of_rows_give_the_same_bits(name):
                       progress=False) for rows in (None, 3)]
     np.testing.assert_array_equal(raws[0].data, raws[1].data)
     whole = reduce(raws[0], inst)
-    for pixels in (17, 3 * 17 + 5):      # one row a band; three rows and a remainder
-        banded = reduce(raws[1], inst, band_pixels=pixels)
+    for pixels, workers in ((17, 1), (17, 3), (3 * 17 + 5, 2)):  # one row a band; 3 rows and a remainder
+        banded = reduce(raws[1], inst, band_pixels=pixels, workers=workers)
         for field in dataclasses.fields(whole):
             a, b = getattr(whole, field.name), getattr(banded, field.name)
             assert getattr(a, "unit", None) == getattr(b, "unit", None)

@@ -13,6 +13,7 @@ Fourier coefficients and look-up tables.
 import dataclasses
 import importlib
 import os
+from concurrent.futures import ThreadPoolExecutor
 
 import astropy.units as u
 import numpy as np
@@ -20,6 +21,7 @@ import numpy as np
 from gongsynth.instruments import get
 from gongsynth.instruments.base import Observables
 from gongsynth.stages.camera.detector import normalise_flat, read_dark
+from gongsynth.stages.psf import fft_workers
 from gongsynth.validation import check_finite, check_quantity
 
 __all__ = ["Observables", "reduce", "algorithm", "subtract_dark", "divide_flat"]
@@ -132,7 +134,7 @@ def divide_flat(planes, flat):
 
 
 def reduce(raw, instrument=None, dark=None, flat=None, *, frames_per_plane=None, band_pixels=None,
-           **options):
+           workers=None, **options):
     """
     Reduce K raw planes to a magnetogram, a Dopplergram and a (pseudo-)continuum.
 
@@ -166,6 +168,10 @@ def reduce(raw, instrument=None, dark=None, flat=None, *, frames_per_plane=None,
         this many pixels at a time (default `BAND_PIXELS`): the dark, the flat
         and the algorithm work pixel by pixel, so the result does not depend
         on it; only the temporaries' size does.
+    workers : int, optional
+        Threads reducing bands side by side (default: every core; numpy
+        releases the GIL in its loops).  Each band is reduced alone, so the
+        result is the same, bit for bit, for any number.
     **options
         Passed to the instrument's algorithm; GONG: ``wrap_margin``
         (`~astropy.units.Quantity`, angular distance from ±π below which a
@@ -229,10 +235,12 @@ def reduce(raw, instrument=None, dark=None, flat=None, *, frames_per_plane=None,
     if band_rows is None:
         observed = band(None)
     else:
-        observed = None
-        for start in range(0, planes.shape[1], band_rows):
-            rows = slice(start, start + band_rows)
-            observed = _place(observed, band(rows), rows, planes.shape[1])
+        bands = [slice(start, start + band_rows) for start in range(0, planes.shape[1], band_rows)]
+        observed = _place(None, band(bands[0]), bands[0], planes.shape[1])
+        with ThreadPoolExecutor(max(1, min(fft_workers(workers), len(bands) - 1))) as pool:
+            # In order, as each is done: the temporaries of `workers` bands at a time.
+            for rows, part in zip(bands[1:], pool.map(band, bands[1:])):
+                observed = _place(observed, part, rows, planes.shape[1])
     continuum = u.Quantity(observed.continuum)
     if continuum.unit == u.one:
         # The planes given to the algorithm are plain numbers in DN: so is a continuum made from them.
