@@ -23,7 +23,7 @@ SMALL = dict(seed=3, detector_shape=16, resolutions=(1,), photosphere_shape=(32,
 def _camera_and_reduction(config, expected):
     chain = build_chain(config)
     state = chain["camera"].compute(expected_counts=expected)
-    state.update(chain["reduction"].compute(expected_counts=expected, **state))
+    state.update(chain["reduction"].compute(**state))
     return state
 
 
