@@ -8,6 +8,7 @@ the periodic tiling that the library replaces (its tile frequency must show
 in one and not in the other).
 """
 import astropy.units as u
+import numba
 import numpy as np
 import pytest
 import sunpy.map
@@ -200,6 +201,24 @@ def test_same_seed_same_scene_other_seed_other_scene(small_library):
     c = library_scene(small_library, seed=2, **args)[1].data
     assert np.array_equal(a, b) and not np.array_equal(a, c)
 
+
+
+@pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="needs NUMBA_NUM_THREADS >= 2")
+def test_same_bits_for_any_thread_count(small_library):
+    """The renderer's rows run on threads (issue 26): 1 and 2 threads give the same light and truth."""
+    args = dict(instrument=WHOLE, detector_shape=64, supersampling=1, obstime=DATE, seed=1)
+    previous, scenes = numba.get_num_threads(), []
+    try:
+        for threads in (1, 2):
+            numba.set_num_threads(threads)
+            light, truth = library_scene(small_library, **args)
+            scenes.append((np.asarray(light.data.value), np.asarray(truth.data.value)))
+    finally:
+        numba.set_num_threads(previous)
+    (light1, truth1), (light2, truth2) = scenes
+    assert np.count_nonzero(light1[0]) > 0.3 * light1[0].size     # the disk fills much of the grid
+    np.testing.assert_array_equal(light1.view(np.uint32), light2.view(np.uint32))
+    np.testing.assert_array_equal(truth1.view(np.uint32), truth2.view(np.uint32))
 
 def _lattice_power(image, g, period):
     """

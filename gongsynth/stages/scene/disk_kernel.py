@@ -197,9 +197,7 @@ def render_disk(light, truth, h, x0, y0, distance, b0, radius,
     for band_row in nb.prange(n_rows):
         row = row0 + band_row
         acc = np.empty(k_row)
-        tot = np.empty(n_c)
-        amp_t = np.empty(j * n_c)
-        spec = np.empty(j1)
+        spec = np.empty(2 * j1)
         val = np.empty(2 * n_c)
         y = y0 + (row - (big_y - 1) / 2) * h
         for col in range(big_x):
@@ -294,24 +292,23 @@ def render_disk(light, truth, h, x0, y0, distance, b0, radius,
                 continue
             kv = min(np.int64(xv), n_v - 2)
             fv = xv - kv
-            # The basis at the sample's velocity, then every output plane's sum in the basis' order
-            # (the same bits as one sum per plane), the planes' sums side by side: short loops over
-            # contiguous memory that the compiler vectorises.
-            for c in range(n_c):
-                tot[c] = (1.0 - fv) * totals[kv, c] + fv * totals[kv + 1, c]
-            for k in range(j * n_c):
-                amp_t[k] = (1.0 - fv) * basis_t[kv, k] + fv * basis_t[kv + 1, k]
+            gv = 1.0 - fv
             for pol in range(2):
                 e0 = e_index[pol] * j1
                 vs = v_sign[pol]
                 for qq in range(j1):
-                    spec[qq] = acc[e0 + qq] + vs * acc[v_off + qq]
+                    spec[pol * j1 + qq] = acc[e0 + qq] + vs * acc[v_off + qq]
+            for c in range(n_c):
+                tc = gv * totals[kv, c] + fv * totals[kv + 1, c]
+                val[c] = spec[0] * tc
+                val[n_c + c] = spec[j1] * tc
+            for qq in range(j):
+                s0 = spec[qq + 1]
+                s1 = spec[j1 + qq + 1]
                 for c in range(n_c):
-                    val[pol * n_c + c] = spec[0] * tot[c]
-                for qq in range(j):
-                    sq = spec[qq + 1]
-                    for c in range(n_c):
-                        val[pol * n_c + c] += amp_t[qq * n_c + c] * sq
+                    a = gv * basis_t[kv, qq * n_c + c] + fv * basis_t[kv + 1, qq * n_c + c]
+                    val[c] += a * s0
+                    val[n_c + c] += a * s1
             scale = ld * to_earth
             for o in range(n_out):
                 light[o, band_row, col] = scale * val[plane0 + o]
