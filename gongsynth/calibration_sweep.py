@@ -46,14 +46,15 @@ def git_commit():
 
 
 def _seed_factor(run, region):
-    """One seed's own factor; NaN where its pixels alone are too few for the bins (dropped from the scatter)."""
+    """One seed's own factor; NaN where its pixels alone are too few for the bins (not in the scatter)."""
     try:
         return weak_flux_factor(run, region=region, n_boot=0).factor
     except ValueError:
         return math.nan
 
 
-def sweep_configs(latitudes=TABLE_LATITUDES, seeds=(1, 2), *, config=None, preset="default", **simulate_kwargs):
+def sweep_configs(latitudes=TABLE_LATITUDES, seeds=(1, 2), *, config=None, preset="default",
+                  **simulate_kwargs):
     """
     The runs of a sweep, latitude by latitude and seed by seed (as `build_calibration_table` runs them).
 
@@ -199,7 +200,8 @@ def build_calibration_table(latitudes=TABLE_LATITUDES, seeds=(1, 2), *, regions=
         "instrument_name": config.instrument.name,
         "preset": preset,
         "estimator": "papers II/III: flux-conserving piecewise-linear truth = g(measured), "
-                     "sign-symmetrised, weak-flux factor = dg/dmeasured at 0, fitted to the seeds' pixels pooled",
+                     "sign-symmetrised, weak-flux factor = dg/dmeasured at 0, fitted to the seeds' pixels "
+                     "pooled",
         "uncertainty_estimator": UNCERTAINTY_ESTIMATOR,
         "instrument": {k: str(v) for k, v in config.instrument.to_dict().items()},
         "config": run_config(config).to_toml(),

@@ -53,9 +53,15 @@ import sys
 from pathlib import Path
 
 import astropy.units as u
+import numpy as np
 from astropy.table import QTable
 
-from gongsynth.analysis.calibration_table import TABLE_LATITUDES, add_systematic, write_calibration_table
+from gongsynth.analysis.calibration_table import (
+    TABLE_LATITUDES,
+    add_systematic,
+    read_calibration_table,
+    write_calibration_table,
+)
 from gongsynth.calibration_sweep import build_calibration_table, sweep_configs
 from gongsynth.run_cache import entry_path, run_config
 
@@ -73,6 +79,45 @@ GRIDS = {
 MEMBERS = ("plage-elements", "large-umbra", "small-spot")
 
 ENSEMBLE = ROOT / "docs" / "guide" / "sun_ensemble_weak_flux.ecsv"
+
+#: Paper III's statement on the quiet-Sun factor (more than 2 at disk centre, about 1 near the limb).
+PAPER_III = {0.0: "> 2", 75.0: "≈ 1"}
+
+
+def _cell(row, table):
+    """'factor ± stat ± sys' of a quiet-Sun row (the parts a table has)."""
+    text = f"{row['factor']:.3f} ± {row['uncertainty']:.3f}"
+    if "systematic" in table.colnames and np.isfinite(row["systematic"]):
+        text += f" ± {row['systematic']:.3f}"
+    return text
+
+
+def tables_rst(tables):
+    """
+    An RST list-table of the quiet-Sun factors of several tables (label: table), beside paper III.
+
+    Each cell is factor ± statistical (± systematic where the table has it).
+    """
+    def label(table):
+        grid = table.meta.get("grid")
+        seeds = ", ".join(map(str, table.meta.get("seeds", [])))
+        where = (f"{grid['columns'][0]}² × {grid['column_size']}" if grid
+                 else table.meta.get("input_sun", "grid not recorded"))
+        return f"{table.meta.get('instrument_name', 'gong').upper()}, {where}, seeds {seeds}"
+
+    lines = [".. list-table:: Quiet-Sun weak-flux factor: factor ± statistical ± systematic",
+             "   :header-rows: 1", "", "   * - latitude"]
+    lines += [f"     - {name} ({label(table)})" for name, table in tables.items()]
+    lines += ["     - paper III"]
+    quiet = {name: table[np.asarray(table["region"]) == "quiet"] for name, table in tables.items()}
+    first = next(iter(quiet.values()))
+    for latitude in first["latitude"].to_value(u.deg):
+        lines.append(f"   * - {latitude:.0f}°")
+        for name, rows in quiet.items():
+            match = np.isclose(rows["latitude"].to_value(u.deg), latitude)
+            lines.append(f"     - {_cell(rows[match][0], tables[name]) if match.any() else '—'}")
+        lines.append(f"     - {PAPER_III.get(float(latitude), '—')}")
+    return "\n".join(lines) + "\n"
 
 
 def default_out(instrument, grid):
@@ -101,9 +146,9 @@ def main(argv=None):
     parser.add_argument("--columns", type=int, help="Sun columns per side (default: the grid's)")
     parser.add_argument("--column-size", type=float, help="column size in km (default: the grid's)")
     parser.add_argument("--seeds", type=int, nargs="+", help="root seeds (default: the grid's)")
-    parser.add_argument("--latitudes", type=float, nargs="+", help="latitudes in deg (default: the papers' six)")
+    parser.add_argument("--latitudes", type=float, nargs="+", help="latitudes (deg); default the papers' six")
     parser.add_argument("--n-boot", type=int, default=50)
-    parser.add_argument("--out", type=Path, help="output ECSV (default: the shipped file of instrument and grid)")
+    parser.add_argument("--out", type=Path, help="output ECSV (default: the shipped file)")
     parser.add_argument("--overwrite", action="store_true")
     parser.add_argument("--sun", choices=("model-atmosphere", "milne-eddington"))
     parser.add_argument("--ensemble", type=Path, default=ENSEMBLE, help="ensemble weak-flux table (ECSV)")
@@ -112,6 +157,9 @@ def main(argv=None):
     parser.add_argument("--cache", type=Path, help="folder of the finished runs (resumable build)")
     parser.add_argument("--check-cache", action="store_true",
                         help="only list the runs the cache holds and those missing; simulate nothing")
+    parser.add_argument("--rst", type=Path, help="also write the quiet-Sun factors as an RST list-table here")
+    parser.add_argument("--compare", nargs="+", default=[], metavar="LABEL=TABLE",
+                        help="tables to show beside the new one in --rst")
     parser.add_argument("--workers", type=int, help="local Dask worker processes")
     parser.add_argument("--scheduler", help="address or scheduler file of a running Dask cluster")
     args = parser.parse_args(argv)
@@ -138,7 +186,8 @@ def main(argv=None):
 
         client = (Client(scheduler_file=args.scheduler) if Path(args.scheduler).is_file()
                   else Client(args.scheduler))
-    table = build_calibration_table(latitudes, seeds=seeds, n_boot=args.n_boot, progress=True, cache=args.cache,
+    table = build_calibration_table(latitudes, seeds=seeds, n_boot=args.n_boot, progress=True,
+                                    cache=args.cache,
                                     workers=args.workers, client=client, **kwargs)
     if changes is not None:
         source = (f"{args.ensemble.name}: GONG quiet-Sun factor, 256^2 columns of 384 km, seeds "
@@ -147,6 +196,11 @@ def main(argv=None):
             source += f"; used for {args.instrument.upper()} (no {args.instrument.upper()} ensemble run)"
         add_systematic(table, changes, args.members, source=source)
     write_calibration_table(table, out, overwrite=args.overwrite)
+    if args.rst:
+        others = dict(item.split("=", 1) for item in args.compare)
+        tables = {"this build": table} | {name: read_calibration_table(path) for name, path in others.items()}
+        args.rst.write_text(tables_rst(tables))
+        print(f"wrote {args.rst}")
     for row in table:
         systematic = f" +- {row['systematic']:.3f} (sys)" if "systematic" in table.colnames else ""
         print(f"{row['latitude'].to_value(u.deg):4.0f} deg  {row['region']:8s} "

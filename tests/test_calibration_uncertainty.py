@@ -64,15 +64,18 @@ def test_the_seed_scatter_is_recovered_within_its_own_expected_error():
 def test_one_seed_or_nan_seeds_fall_back_to_the_bootstrap():
     assert seed_uncertainty([1.2], 0.004) == (0.004, pytest.approx(np.nan, nan_ok=True))
     uncertainty, spread = seed_uncertainty([1.2, np.nan, 1.3], 0.0)
-    assert spread == pytest.approx(np.std([1.2, 1.3], ddof=1)) and uncertainty == pytest.approx(spread / np.sqrt(2))
+    assert spread == pytest.approx(np.std([1.2, 1.3], ddof=1))
+    assert uncertainty == pytest.approx(spread / np.sqrt(2))
 
 
 def test_the_table_keeps_the_pooled_factor_and_the_seeds():
     table = _table({0: 1.25, 60: 1.05}, per_seed=[[1.3, 1.2, 1.35, 1.25], [1.0, 1.1, 1.05, 1.05]])
     assert list(table["factor"]) == [1.25, 1.05]  # the pooled fit, not the seeds' mean
     assert list(table["bootstrap"]) == [0.004, 0.004] and list(table["n_seeds"]) == [4, 4]
-    assert table["uncertainty"][0] == pytest.approx(np.hypot(np.std([1.3, 1.2, 1.35, 1.25], ddof=1) / 2, 0.004))
-    assert table["seed_factors"].shape == (2, 4) and table.meta["uncertainty_estimator"] == UNCERTAINTY_ESTIMATOR
+    expected = np.hypot(np.std([1.3, 1.2, 1.35, 1.25], ddof=1) / 2, 0.004)
+    assert table["uncertainty"][0] == pytest.approx(expected)
+    assert table["seed_factors"].shape == (2, 4)
+    assert table.meta["uncertainty_estimator"] == UNCERTAINTY_ESTIMATOR
     with pytest.raises(ValueError, match="per_seed must have one entry per fit"):
         _table({0: 1.25}, per_seed=[[1.0], [1.1]])
 
@@ -93,7 +96,8 @@ def test_metadata_and_uncertainty_columns_round_trip(tmp_path):
     path = tmp_path / "table.ecsv"
     write_calibration_table(table, path)
     back = read_calibration_table(path)
-    for column in ("factor", "uncertainty", "bootstrap", "seed_spread", "n_seeds", "seed_factors", "systematic"):
+    for column in ("factor", "uncertainty", "bootstrap", "seed_spread", "n_seeds", "seed_factors",
+                   "systematic"):
         np.testing.assert_array_equal(np.asarray(back[column]), np.asarray(table[column]))
     assert back.meta["grid"] == {"columns": [1024, 1024], "column_size": "96.0 km"}
     assert back.meta["seeds"] == [1, 2, 3, 4] and back.meta["instrument_name"] == "gong"
@@ -110,14 +114,14 @@ def test_calibrate_reports_statistical_and_systematic_apart_and_old_tables_still
     assert "calsyst" not in out.meta and out.meta["calstat"] == pytest.approx(0.004, abs=1e-4)  # 0.004 / 1
     with pytest.raises(ValueError, match="no 'systematic' column"):
         weak_flux_factor_map(smap, table=path, column="systematic")
-    new = add_systematic(_table({0: 2.0, 60: 1.0}, per_seed=[[2.1, 1.9], [1.0, 1.0]]), CHANGES, ["small", "large"],
-                         source="test")
+    new = add_systematic(_table({0: 2.0, 60: 1.0}, per_seed=[[2.1, 1.9], [1.0, 1.0]]), CHANGES,
+                         ["small", "large"], source="test")
     out_new = calibrate(smap, table=new)
     np.testing.assert_array_equal(out_new.data, out.data)  # the curves are the same
     # Relative: the disk centre's 0.1 / 2 against the limb's 0.045 / 1.
     assert out_new.meta["calsyst"] == pytest.approx(0.05, abs=2e-3)
-    assert out_new.meta["calstat"] == pytest.approx(np.hypot(np.std([2.1, 1.9], ddof=1) / np.sqrt(2), 0.004) / 2,
-                                                    abs=2e-3)
+    stat_centre = np.hypot(np.std([2.1, 1.9], ddof=1) / np.sqrt(2), 0.004) / 2
+    assert out_new.meta["calstat"] == pytest.approx(stat_centre, abs=2e-3)
     systematic = weak_flux_factor_map(smap, table=new, column="systematic").data
     on = np.isfinite(systematic)
     assert np.nanmax(systematic) <= 0.1 + 1e-12 and np.nanmin(systematic[on]) >= 0.045 - 1e-12

@@ -342,7 +342,7 @@ def _quiet_column(table, column):
 
 
 def _relative_uncertainties(theta, table):
-    """Header keywords: the largest relative statistical (CALSTAT) and systematic (CALSYST) uncertainty on θ."""
+    """Header keywords: the largest relative statistical (CALSTAT) and systematic (CALSYST) error on θ."""
     keywords = {}
     if theta.size == 0:
         return keywords

@@ -35,8 +35,9 @@ from astropy.table import QTable
 from gongsynth.analysis.weak_flux import PAPER_BINS, FluxConservingCurve
 from gongsynth.files import atomic_path
 
-__all__ = ["DEFAULT_TABLE", "TABLE_LATITUDES", "UNCERTAINTY_ESTIMATOR", "SYSTEMATIC_RULE", "calibration_table",
-           "seed_uncertainty", "ensemble_systematic", "add_systematic", "read_calibration_table",
+__all__ = ["DEFAULT_TABLE", "TABLE_LATITUDES", "UNCERTAINTY_ESTIMATOR", "SYSTEMATIC_RULE",
+           "calibration_table", "seed_uncertainty", "ensemble_systematic", "add_systematic",
+           "read_calibration_table",
            "write_calibration_table", "table_curve"]
 
 #: The viewing angles of the papers' tables.
@@ -46,10 +47,10 @@ TABLE_LATITUDES = u.Quantity(sorted(PAPER_BINS), u.deg)
 DEFAULT_TABLE = "calibration_default.ecsv"
 
 #: The statistical estimator (recorded in every table's metadata as ``uncertainty_estimator``).
-UNCERTAINTY_ESTIMATOR = ("uncertainty = sqrt(seed_spread**2 / n_seeds + bootstrap**2): seed_spread the standard "
-                         "deviation (ddof=1) of the factors fitted to each seed's pixels alone, bootstrap the "
-                         "block bootstrap of the fit pooled over the seeds (one seed: the bootstrap alone); the "
-                         "factor and curve are the pooled fit")
+UNCERTAINTY_ESTIMATOR = ("uncertainty = sqrt(seed_spread**2 / n_seeds + bootstrap**2): seed_spread the "
+                         "standard deviation (ddof=1) of the factors fitted to each seed's pixels alone, "
+                         "bootstrap the block bootstrap of the fit pooled over the seeds (one seed: the "
+                         "bootstrap alone); the factor and curve are the pooled fit")
 
 #: How `ensemble_systematic` fills the angles the ensemble did not measure (metadata ``systematic_rule``).
 SYSTEMATIC_RULE = ("systematic = max |paired change of the quiet-Sun factor from the default Sun| over the "
@@ -204,7 +205,8 @@ def ensemble_systematic(latitudes, changes, members):
     variant = np.asarray(changes["variant"]).astype(str)
     unknown = members - set(variant)
     if unknown:
-        raise ValueError(f"members {sorted(unknown)} are not in the ensemble table (variants {sorted(set(variant))})")
+        raise ValueError(f"members {sorted(unknown)} are not in the ensemble table "
+                         f"(variants {sorted(set(variant))})")
     at = u.Quantity(changes["latitude"], u.deg).to_value(u.deg)
     change = np.abs(np.asarray(changes["change"], float))
     accepted = np.isin(variant, sorted(members)) & np.isfinite(change)
@@ -213,7 +215,8 @@ def ensemble_systematic(latitudes, changes, members):
     if not measured:
         raise ValueError("the ensemble table has no finite change for any of the members")
     envelope = max(measured.values())
-    return np.array([next((v for a, v in measured.items() if np.isclose(a, lat)), envelope) for lat in latitudes])
+    return np.array([next((v for a, v in measured.items() if np.isclose(a, lat)), envelope)
+                     for lat in latitudes])
 
 
 def add_systematic(table, changes, members, *, source):
