@@ -33,9 +33,15 @@ How to regenerate the shipped tables from a cache of the runs (nothing is
 simulated when the cache holds them all; ``--check-cache`` only lists what is
 cached and what is missing)::
 
-    python scripts/build_default_calibration_table.py --instrument gong --cache /work/cache-1024 --overwrite
-    python scripts/build_default_calibration_table.py --instrument hmi --cache /work/cache-1024 --overwrite
-    python scripts/build_default_calibration_table.py --grid run --overwrite
+    python scripts/build_default_calibration_table.py --grid run --cache RUNS-256 --overwrite
+    python scripts/build_default_calibration_table.py --instrument hmi --cache RUNS-1024 --overwrite
+    python scripts/build_default_calibration_table.py --instrument gong --cache RUNS-1024 --overwrite \
+        --rst docs/guide/calibration_tables.txt \
+        --compare "run grid=gongsynth/data/calibration_run_grid.ecsv" \
+                  "HMI, paper grid=gongsynth/data/calibration_hmi.ecsv"
+
+(the last writes the guide's table of the quiet-Sun factors; leave out a
+``--compare`` table not built yet).
 
 Same gongsynth version, same seeds: the same numbers, bit for bit (only the
 ``created`` date in the metadata differs), whatever the number of workers.
@@ -160,6 +166,7 @@ def main(argv=None):
     parser.add_argument("--rst", type=Path, help="also write the quiet-Sun factors as an RST list-table here")
     parser.add_argument("--compare", nargs="+", default=[], metavar="LABEL=TABLE",
                         help="tables to show beside the new one in --rst")
+    parser.add_argument("--label", help="the new table's column heading in --rst (default: '<grid> grid')")
     parser.add_argument("--workers", type=int, help="local Dask worker processes")
     parser.add_argument("--scheduler", help="address or scheduler file of a running Dask cluster")
     args = parser.parse_args(argv)
@@ -198,7 +205,8 @@ def main(argv=None):
     write_calibration_table(table, out, overwrite=args.overwrite)
     if args.rst:
         others = dict(item.split("=", 1) for item in args.compare)
-        tables = {"this build": table} | {name: read_calibration_table(path) for name, path in others.items()}
+        tables = {args.label or f"{args.grid} grid": table}
+        tables |= {name: read_calibration_table(path) for name, path in others.items()}
         args.rst.write_text(tables_rst(tables))
         print(f"wrote {args.rst}")
     for row in table:
