@@ -90,7 +90,7 @@ def seed_uncertainty(per_seed, bootstrap):
     --------
     >>> uncertainty, spread = seed_uncertainty([1.2, 1.3, 1.25, 1.35], 0.004)
     >>> round(spread, 4), round(uncertainty, 4)
-    (0.0645, 0.0324)
+    (0.0645, 0.0325)
     """
     values = np.asarray(per_seed, float).ravel()
     values = values[np.isfinite(values)]
