@@ -133,4 +133,6 @@ def test_the_shipped_table_loads_and_calibrates():
     table = read_calibration_table()
     assert isinstance(table, QTable) and {"factor", "uncertainty"} <= set(table.colnames)
     out = calibrate(_disk_map(11, 200), table=table)
-    assert np.isfinite(out.data).any() and "calstat" in out.meta
+    assert np.isfinite(out.data).any() and "calstat" in out.meta and "calsyst" in out.meta
+    assert table.meta["grid"]["columns"] == [1024, 1024] and table.meta["seeds"] == [1, 2, 3, 4]
+    assert np.all(table["uncertainty"] >= table["bootstrap"]) and "systematic" in table.colnames
