@@ -39,9 +39,11 @@ REAL = Path(os.environ.get("GONGSYNTH_REAL_DATA", "shared/data/real"))
 # ---------
 #
 # One row per viewing angle and region: the weak-flux factor (true per
-# measured flux at zero field) with its bootstrap uncertainty, and the curve.
+# measured flux at zero field) with its statistical uncertainty (the seeds'
+# scatter and the bootstrap) and the Sun-model ensemble's systematic one
+# (quiet Sun), and the curve.
 table = read_calibration_table()
-print(table["latitude", "region", "factor", "uncertainty", "n_pixels"])
+print(table["latitude", "region", "factor", "uncertainty", "systematic", "n_pixels"])
 
 fig, ax = plt.subplots(figsize=(6, 4), layout="constrained")
 for region, colour in (("quiet", "C0"), ("sunspot", "C3")):

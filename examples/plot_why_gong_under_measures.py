@@ -26,6 +26,7 @@ import numpy as np
 from astropy.table import QTable
 
 import gongsynth
+from gongsynth.analysis.calibration_table import read_calibration_table
 from gongsynth.stages.channels import channel_images
 from gongsynth.stages.reduction import reduce
 from gongsynth.sun.rt.eos import solve_state
@@ -228,7 +229,10 @@ plt.show()
 # long for a documentation build.  Error bars are the standard error over the
 # seeds (each seed a different Sun).  Beside them, the same runs of the
 # Milne–Eddington toy Sun (one line strength everywhere, 1024² columns of
-# 96 km, the same seeds), and the papers' statement.
+# 96 km, the same seeds), the shipped calibration table (its quiet-Sun
+# factor with the statistical uncertainty from its seeds, and, lighter, the
+# systematic band of the Sun-model ensemble: see the calibration guide), and
+# the papers' statement.
 
 table = QTable.read(files("gongsynth") / "data" / "weak_flux_factors.ecsv")
 sweep = table[table["label"] == "model-atmosphere"]
@@ -239,6 +243,15 @@ ax.errorbar(sweep["latitude"].to_value(u.deg), sweep["factor"], sweep["uncertain
             capsize=3, label="3-D model Sun through LTE radiative transfer (the default)")
 ax.errorbar(toy["latitude"].to_value(u.deg) + 0.8, toy["factor"], toy["uncertainty"], marker="s",
             capsize=3, label="Milne–Eddington toy Sun")
+shipped = read_calibration_table()
+shipped = shipped[np.asarray(shipped["region"]) == "quiet"]
+grid = shipped.meta.get("grid", {"columns": ["?"], "column_size": "?"})
+where = shipped["latitude"].to_value(u.deg) - 0.8
+if "systematic" in shipped.colnames:
+    ax.errorbar(where, shipped["factor"], np.hypot(shipped["uncertainty"], shipped["systematic"]), fmt="none",
+                color="C2", alpha=0.35, lw=4)
+ax.errorbar(where, shipped["factor"], shipped["uncertainty"], marker="D", color="C2", capsize=3,
+            label=f"shipped table ({grid['columns'][0]}² × {grid['column_size']}): ± stat (± sys, light)")
 ax.plot([0, 75], [2.2, 1.0], color="0.5", lw=8, alpha=0.3, solid_capstyle="round",
         label="paper III: more than 2 at disk centre, about 1 near the limb")
 ax.axhline(1, color="k", lw=0.5)

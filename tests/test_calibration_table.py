@@ -116,6 +116,10 @@ def test_a_small_sweep_builds_a_table():
     assert table["mu"][1] == pytest.approx(0.5, abs=0.1)
     assert np.all(table["factor"] > 0) and np.all(table["uncertainty"] > 0)
     assert table.meta["seeds"] == [1, 2] and "[simulation]" in table.meta["config"]
+    assert table.meta["grid"] == {"columns": [64, 64], "column_size": "1536.0 km"}
+    assert table.meta["instrument_name"] == "gong" and "git_commit" in table.meta
+    # Each seed fitted alone too; the statistical uncertainty is at least the pooled bootstrap.
+    assert table["seed_factors"].shape == (2, 2) and np.all(table["uncertainty"] >= table["bootstrap"])
     with pytest.raises(ValueError, match="regions"):
         build_calibration_table([0] * u.deg, regions=["plage"], progress=False)
     with pytest.raises(ValueError, match="preset"):

@@ -35,6 +35,12 @@ Rules (documented in the guide's calibration page):
   (`gongsynth.analysis.cross_calibration_table`; shipped:
   ``gongsynth/data/cross_calibration_default.ecsv``).  The factor is one
   number per angle over all field strengths.
+- **Uncertainties**: the table's ``uncertainty`` (statistical: seeds and
+  bootstrap) and ``systematic`` (the Sun-model ensemble) of the quiet-Sun
+  factor are kept apart: `weak_flux_factor_map` maps either at every pixel's
+  θ (``column=``), and `calibrate` writes the largest relative value of each
+  over the map's angles in the header (``CALSTAT``, ``CALSYST``; a table
+  without a ``systematic`` column, as shipped before, writes no ``CALSYST``).
 """
 import astropy.units as u
 import numpy as np
@@ -258,7 +264,10 @@ def calibrate(smap, *, table=None, force=False, to="truth", instrument=None, sce
     `~sunpy.map.GenericMap`
         Same WCS and metadata, calibrated data in G, with ``CALTABLE`` naming
         the table (``CALTO`` the target scale; ``CALSCENE`` the scene table
-        with ``scene="distance"``) and a HISTORY line.
+        with ``scene="distance"``), ``CALSTAT`` and ``CALSYST`` (the largest
+        relative statistical and systematic uncertainty of the quiet-Sun
+        factor over the map's angles, where the table has them) and a
+        HISTORY line.
 
     Examples
     --------
@@ -319,8 +328,31 @@ def calibrate(smap, *, table=None, force=False, to="truth", instrument=None, sce
         how += ", quiet pixels x ratio(theta, distance from |B| >= threshold cos theta)"
     meta["bunit"] = "G"
     meta["caltable"] = str(table.meta.get("source", "in-memory table"))[:68]
+    meta.update(_relative_uncertainties(theta[valid], table))
     meta["history"] = (str(meta.get("history", "")) + f"\ngongsynth.calibrate: {how}").strip()
     return sunpy.map.Map(out, meta)
+
+
+def _quiet_column(table, column):
+    """A quiet-Sun column of the table at its angles, in increasing order: (angles, values)."""
+    quiet = np.asarray(table["region"]) == "quiet"
+    angles = table["latitude"][quiet].to_value(u.deg)
+    order = np.argsort(angles)
+    return angles[order], np.asarray(table[column][quiet], float)[order]
+
+
+def _relative_uncertainties(theta, table):
+    """Header keywords: the largest relative statistical (CALSTAT) and systematic (CALSYST) error on θ."""
+    keywords = {}
+    if theta.size == 0:
+        return keywords
+    angles, factors = _quiet_column(table, "factor")
+    for keyword, column in (("calstat", "uncertainty"), ("calsyst", "systematic")):
+        if column in table.colnames:
+            relative = _factor_at(theta, angles, _quiet_column(table, column)[1] / factors)
+            if np.isfinite(relative).any():
+                keywords[keyword] = round(float(np.nanmax(relative)), 4)
+    return keywords
 
 
 def _scene_table(table):
@@ -393,7 +425,7 @@ def _convert(smap, to, table, instrument):
     return sunpy.map.Map(out, meta)
 
 
-def weak_flux_factor_map(smap, *, table=None):
+def weak_flux_factor_map(smap, *, table=None, column="factor"):
     """
     The quiet-Sun weak-flux factor (true per measured flux at zero field) at every pixel's viewing angle.
 
@@ -403,19 +435,24 @@ def weak_flux_factor_map(smap, *, table=None):
         Any map `viewing_angle` understands.
     table : `~astropy.table.QTable` or path-like, optional
         Default the table shipped with gongsynth.
+    column : {"factor", "uncertainty", "systematic"}
+        The factor (default), or its statistical or systematic uncertainty
+        (absolute, interpolated in θ like the factor).
 
     Returns
     -------
     `~sunpy.map.GenericMap`
-        Dimensionless factors on the map's grid (NaN off the disk).
+        Dimensionless values on the map's grid (NaN off the disk).
     """
+    if column not in ("factor", "uncertainty", "systematic"):
+        raise ValueError(f"column must be 'factor', 'uncertainty' or 'systematic', got {column!r}")
     if table is None or not hasattr(table, "colnames"):
         table = read_calibration_table(table)
+    if column not in table.colnames:
+        raise ValueError(f"the calibration table has no {column!r} column (tables built before issue 24 "
+                         f"have no 'systematic')")
     theta = viewing_angle(smap).to_value(u.deg)
-    quiet = np.asarray(table["region"]) == "quiet"
-    angles = table["latitude"][quiet].to_value(u.deg)
-    order = np.argsort(angles)
-    out = _factor_at(theta, angles[order], np.asarray(table["factor"][quiet])[order])
+    out = _factor_at(theta, *_quiet_column(table, column))
     meta = smap.meta.copy()
     meta["bunit"] = ""
     return sunpy.map.Map(out, meta)

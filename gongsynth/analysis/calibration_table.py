@@ -9,6 +9,22 @@ makes them); `read_calibration_table` reads a saved one, by default the table
 shipped with gongsynth (made by ``scripts/build_default_calibration_table.py``,
 whose docstring says how to regenerate it); `table_curve` gives back the
 curve of one row.
+
+Uncertainties (columns added by this version; older tables without them still
+load and calibrate):
+
+- ``uncertainty``: the *statistical* uncertainty of the factor,
+  ``sqrt(s² / n + σ_boot²)`` (`seed_uncertainty`): ``s`` the standard
+  deviation of the ``n`` seeds' own factors (``seed_spread``), so ``s / √n``
+  the standard error of a mean over seeds, which carries the run-to-run
+  variation of the Sun's realisation (the spot, the network) that the pooled
+  fit's block bootstrap cannot see; ``σ_boot`` that bootstrap (``bootstrap``),
+  kept in quadrature as a floor (one seed: the bootstrap alone).  The pixel
+  noise is thereby counted twice, which is conservative and small: the
+  bootstrap is 10 – 30 × below the seed scatter.
+- ``systematic``: the Sun-model ensemble's band (`ensemble_systematic`): the
+  largest paired change of the factor from the default Sun over the ensemble
+  members that meet their observational constraints, a symmetric half-width.
 """
 import importlib.resources
 
@@ -19,7 +35,9 @@ from astropy.table import QTable
 from gongsynth.analysis.weak_flux import PAPER_BINS, FluxConservingCurve
 from gongsynth.files import atomic_path
 
-__all__ = ["DEFAULT_TABLE", "TABLE_LATITUDES", "calibration_table", "read_calibration_table",
+__all__ = ["DEFAULT_TABLE", "TABLE_LATITUDES", "UNCERTAINTY_ESTIMATOR", "SYSTEMATIC_RULE",
+           "calibration_table", "seed_uncertainty", "ensemble_systematic", "add_systematic",
+           "read_calibration_table",
            "write_calibration_table", "table_curve"]
 
 #: The viewing angles of the papers' tables.
@@ -27,6 +45,18 @@ TABLE_LATITUDES = u.Quantity(sorted(PAPER_BINS), u.deg)
 
 #: File name of the table shipped with gongsynth (in ``gongsynth/data``).
 DEFAULT_TABLE = "calibration_default.ecsv"
+
+#: The statistical estimator (recorded in every table's metadata as ``uncertainty_estimator``).
+UNCERTAINTY_ESTIMATOR = ("uncertainty = sqrt(seed_spread**2 / n_seeds + bootstrap**2): seed_spread the "
+                         "standard deviation (ddof=1) of the factors fitted to each seed's pixels alone, "
+                         "bootstrap the block bootstrap of the fit pooled over the seeds (one seed: the "
+                         "bootstrap alone); the factor and curve are the pooled fit")
+
+#: How `ensemble_systematic` fills the angles the ensemble did not measure (metadata ``systematic_rule``).
+SYSTEMATIC_RULE = ("systematic = max |paired change of the quiet-Sun factor from the default Sun| over the "
+                   "accepted ensemble members (the default itself counts as 0) at each measured latitude; at "
+                   "a latitude not measured, the largest value over the measured latitudes (conservative: "
+                   "the band shrinks from 0 to 60 deg); sunspot rows: NaN (not measured)")
 
 _MAX_NODES = max(max(bins) for bins in PAPER_BINS.values())
 
@@ -37,7 +67,43 @@ def _padded(values, size):
     return out
 
 
-def calibration_table(fits, *, mu, metadata=None):
+def seed_uncertainty(per_seed, bootstrap):
+    """
+    The statistical uncertainty of a pooled factor from its seeds' own factors and its bootstrap.
+
+    Parameters
+    ----------
+    per_seed : sequence of float
+        The factor fitted to each seed's pixels alone (NaN entries are dropped).
+    bootstrap : float
+        The block-bootstrap standard deviation of the fit pooled over the seeds.
+
+    Returns
+    -------
+    uncertainty : float
+        ``sqrt(s² / n + bootstrap²)`` (see `UNCERTAINTY_ESTIMATOR`);
+        ``bootstrap`` with fewer than two seeds.
+    spread : float
+        ``s``, the seeds' standard deviation (ddof=1; NaN with fewer than two).
+
+    Examples
+    --------
+    >>> uncertainty, spread = seed_uncertainty([1.2, 1.3, 1.25, 1.35], 0.004)
+    >>> round(spread, 4), round(uncertainty, 4)
+    (0.0645, 0.0325)
+    """
+    values = np.asarray(per_seed, float).ravel()
+    values = values[np.isfinite(values)]
+    bootstrap = float(bootstrap)
+    if values.size < 2:
+        return bootstrap, float("nan")
+    spread = float(np.std(values, ddof=1))
+    if not np.isfinite(bootstrap):
+        bootstrap = 0.0
+    return float(np.hypot(spread / np.sqrt(values.size), bootstrap)), spread
+
+
+def calibration_table(fits, *, mu, metadata=None, per_seed=None):
     """
     Tabulate weak-flux fits: one row per fit.
 
@@ -49,13 +115,20 @@ def calibration_table(fits, *, mu, metadata=None):
         cos of the viewing angle of each fit.
     metadata : dict, optional
         Provenance for the table's ``meta``.
+    per_seed : sequence of sequence of float, optional
+        For each fit, the factors of its seeds fitted one by one: then
+        ``uncertainty`` is `seed_uncertainty`'s (the fits' own uncertainty is
+        kept as ``bootstrap``, the seeds' scatter as ``seed_spread``, their
+        number as ``n_seeds``); default the fits' own uncertainty.
 
     Returns
     -------
     `~astropy.table.QTable`
         Columns ``latitude`` (deg), ``mu``, ``region``, ``factor``,
         ``uncertainty``, ``n_pixels``, ``n_bins``, ``nodes`` and ``values``
-        (the curve, G, NaN-padded to a common length).
+        (the curve, G, NaN-padded to a common length); with ``per_seed``
+        also ``bootstrap``, ``seed_spread``, ``n_seeds`` and the per-seed
+        ``seed_factors`` (NaN-padded).
 
     Examples
     --------
@@ -78,11 +151,103 @@ def calibration_table(fits, *, mu, metadata=None):
     table["region"] = [f.region for f in fits]
     table["factor"] = [f.factor for f in fits]
     table["uncertainty"] = [f.uncertainty for f in fits]
+    if per_seed is not None:
+        per_seed = [np.asarray(p, float).ravel() for p in per_seed]
+        if len(per_seed) != len(fits):
+            raise ValueError(f"per_seed must have one entry per fit ({len(fits)}), got {len(per_seed)}")
+        combined = [seed_uncertainty(p, f.uncertainty) for p, f in zip(per_seed, fits)]
+        table["uncertainty"] = [c[0] for c in combined]
+        table["bootstrap"] = [f.uncertainty for f in fits]
+        table["seed_spread"] = [c[1] for c in combined]
+        table["n_seeds"] = [int(np.isfinite(p).sum()) for p in per_seed]
+        width = max(p.size for p in per_seed)
+        table["seed_factors"] = np.array([_padded(p, width) for p in per_seed]).reshape(len(fits), width)
+        table.meta["uncertainty_estimator"] = UNCERTAINTY_ESTIMATOR
     table["n_pixels"] = [f.n_pixels for f in fits]
     table["n_bins"] = [f.curve.nodes.size for f in fits]
     table["nodes"] = u.Quantity([_padded(f.curve.nodes.to_value(u.G), _MAX_NODES) for f in fits], u.G)
     table["values"] = u.Quantity([_padded(f.curve.values.to_value(u.G), _MAX_NODES) for f in fits], u.G)
     table.meta.update(metadata or {})
+    return table
+
+
+def ensemble_systematic(latitudes, changes, members):
+    """
+    The Sun-model systematic of the quiet-Sun factor at each latitude, from the ensemble's paired changes.
+
+    Parameters
+    ----------
+    latitudes : `~astropy.units.Quantity`
+        Where the systematic is wanted.
+    changes : `~astropy.table.Table`
+        The ensemble's weak-flux table (``scripts/sun_ensemble.py --weak-flux``):
+        columns ``variant``, ``latitude`` and ``change`` (the paired change of
+        the factor from the default Sun, same seeds).
+    members : sequence of str
+        The variants accepted by their observational constraints; the others'
+        rows are ignored.  The default Sun is always counted (change 0).
+
+    Returns
+    -------
+    `~numpy.ndarray`
+        One value per latitude (`SYSTEMATIC_RULE`).
+
+    Examples
+    --------
+    >>> from astropy.table import Table
+    >>> changes = Table({"variant": ["a", "b", "c", "a", "b"], "latitude": [0.0, 0, 0, 60, 60] * u.deg,
+    ...                  "change": [-0.07, 0.1, 0.5, -0.04, 0.001]})
+    >>> ensemble_systematic([0, 45, 60] * u.deg, changes, members=["a", "b"]).round(3).tolist()
+    [0.1, 0.1, 0.04]
+    """
+    latitudes = u.Quantity(latitudes, u.deg).ravel().to_value(u.deg)
+    members = set(members)
+    variant = np.asarray(changes["variant"]).astype(str)
+    unknown = members - set(variant)
+    if unknown:
+        raise ValueError(f"members {sorted(unknown)} are not in the ensemble table "
+                         f"(variants {sorted(set(variant))})")
+    at = u.Quantity(changes["latitude"], u.deg).to_value(u.deg)
+    change = np.abs(np.asarray(changes["change"], float))
+    accepted = np.isin(variant, sorted(members)) & np.isfinite(change)
+    measured = {float(a): float(np.max(change[accepted & np.isclose(at, a)], initial=0.0))
+                for a in np.unique(at[accepted])}
+    if not measured:
+        raise ValueError("the ensemble table has no finite change for any of the members")
+    envelope = max(measured.values())
+    return np.array([next((v for a, v in measured.items() if np.isclose(a, lat)), envelope)
+                     for lat in latitudes])
+
+
+def add_systematic(table, changes, members, *, source):
+    """
+    Add the ``systematic`` column (`ensemble_systematic`) to a calibration table, in place.
+
+    Quiet-Sun rows get the ensemble's band; sunspot rows NaN (the ensemble
+    measured the quiet-Sun factor only).  The metadata records the rule, the
+    members and ``source``.
+
+    Parameters
+    ----------
+    table : `~astropy.table.QTable`
+    changes : `~astropy.table.Table`
+        See `ensemble_systematic`.
+    members : sequence of str
+    source : str
+        Where the ensemble's numbers come from (file, grid, instrument).
+
+    Returns
+    -------
+    `~astropy.table.QTable`
+        ``table``.
+    """
+    quiet = np.asarray(table["region"]) == "quiet"
+    systematic = np.full(len(table), np.nan)
+    systematic[quiet] = ensemble_systematic(table["latitude"][quiet], changes, members)
+    table["systematic"] = systematic
+    table.meta["systematic_rule"] = SYSTEMATIC_RULE
+    table.meta["ensemble_members"] = sorted(set(members))
+    table.meta["ensemble_source"] = str(source)
     return table
 
 
