@@ -12,7 +12,7 @@ from pathlib import Path
 
 import astropy.units as u
 
-from gongsynth.analysis.calibration_table import TABLE_LATITUDES, UNCERTAINTY_ESTIMATOR, calibration_table
+from gongsynth.analysis.calibration_table import TABLE_LATITUDES, calibration_table
 from gongsynth.analysis.weak_flux import weak_flux_factor
 from gongsynth.config import SimulationConfig
 from gongsynth.geometry import Pointing
@@ -202,7 +202,6 @@ def build_calibration_table(latitudes=TABLE_LATITUDES, seeds=(1, 2), *, regions=
         "estimator": "papers II/III: flux-conserving piecewise-linear truth = g(measured), "
                      "sign-symmetrised, weak-flux factor = dg/dmeasured at 0, fitted to the seeds' pixels "
                      "pooled",
-        "uncertainty_estimator": UNCERTAINTY_ESTIMATOR,
         "instrument": {k: str(v) for k, v in config.instrument.to_dict().items()},
         "config": run_config(config).to_toml(),
         "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
