@@ -64,7 +64,7 @@ def power_law_fluxes(rng, total, lo=1e17, hi=1e19, index=1.85):
     return draw(n)
 
 
-def render_elements(grid, rng, weight, fluxes, signs, core_field):
+def render_elements(grid, rng, weight, fluxes, signs, core_field, where=None):
     """
     B_z (G) of flux elements: Gaussians of flux Φ and peak ``core_field``, placed with probability ∝ weight.
 
@@ -82,6 +82,9 @@ def render_elements(grid, rng, weight, fluxes, signs, core_field):
         Mx and ±1.
     core_field : float
         G.
+    where : `numpy.ndarray`, optional
+        Flat pixel indices of the elements (then ``weight`` is not used and
+        ``rng`` draws nothing); default: drawn with probability ∝ ``weight``.
 
     Returns
     -------
@@ -91,8 +94,9 @@ def render_elements(grid, rng, weight, fluxes, signs, core_field):
     bz = np.zeros((grid.ny, grid.nx))
     if fluxes.size == 0:
         return bz
-    p = weight.ravel() / weight.sum()
-    where = rng.choice(p.size, size=fluxes.size, p=p)
+    if where is None:
+        p = weight.ravel() / weight.sum()
+        where = rng.choice(p.size, size=fluxes.size, p=p)
     pixel_area = (grid.dx * 1e5) ** 2
     sigma = np.maximum(np.sqrt(fluxes / (2 * math.pi * core_field)) / 1e5, 0.6 * grid.dx)
     cls = np.floor(np.log(sigma / sigma.min()) / np.log(1.25)).astype(int)   # size classes 25 % apart
