@@ -10,10 +10,12 @@ index of the element fluxes (patches of |B_z| > 100 G of one sign; maximum
 likelihood above 1e18 Mx; Parnell et al. 2009: 1.85), and the cell size from
 the pattern: the wavelength of the peak of k·P(k) of |B_z| smoothed over
 2 Mm and the lag of the secondary maximum of its autocorrelation.
-Writes ``network_statistics.ecsv`` and, with ``--figure PATH``, the
-quick-look of a tiled run (seed 1, network on, default everything else).
+Writes ``network_statistics.ecsv`` (the guide's table:
+``--seeds 1 2 3 4 --out docs/guide``).  The guide's figure is the quick-look
+of ``gongsynth simulate --config net.toml --out DIR`` with ``[photosphere]
+network = true`` and seed 1, reduced to 40 % in size.
 
-Usage: ``nice -n 5 python scripts/network_statistics.py [--seeds 1 2] [--out DIR] [--figure PNG]``
+Usage: ``nice -n 5 python scripts/network_statistics.py [--seeds 1 2] [--out DIR]``
 """
 import argparse
 import math
@@ -34,7 +36,8 @@ def radial_profile(field, grid):
     ix = np.fft.fftfreq(grid.nx) * grid.nx
     r = np.rint(np.hypot(iy[:, None], ix[None, :])).astype(int)
     n = min(grid.ny, grid.nx) // 2
-    return np.bincount(r.ravel(), field.ravel(), n + 1)[: n + 1] / np.bincount(r.ravel(), None, n + 1)[: n + 1]
+    total = np.bincount(r.ravel(), field.ravel(), n + 1)[: n + 1]
+    return total / np.bincount(r.ravel(), None, n + 1)[: n + 1]
 
 
 def cell_scales(b_abs, grid):
@@ -65,6 +68,7 @@ def element_index(bz, grid, threshold=100.0, lo=1e18):
 
 
 def measure(seed):
+    """One seed's row of the table."""
     sun = model_sun((256, 256), 384 * u.km, seed=seed, spot=False, network=True)
     plan = sun._plan                                          # the whole-plane ingredients
     grid = plan["grid"]
@@ -86,27 +90,17 @@ def measure(seed):
                 spectrum_peak=spectrum_peak / 1e3 * u.Mm, acf_peak=acf_peak / 1e3 * u.Mm)
 
 
-def figure(path):
-    from gongsynth import simulate
-    from gongsynth.products.quicklook import quicklook_figure
-
-    result = simulate(seed=1, progress=False, photosphere={"network": True})
-    fig = quicklook_figure(result)
-    fig.savefig(path, dpi=50)
-
-
 def main(argv=None):
+    """Measure, write the ECSV."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
     parser.add_argument("--seeds", type=int, nargs="+", default=[1, 2])
     parser.add_argument("--out", type=Path, default=Path("."))
-    parser.add_argument("--figure", type=Path, default=None)
     args = parser.parse_args(argv)
     table = QTable(rows=[measure(s) for s in args.seeds])
-    table.meta["comments"] = ["3-D Sun with network=True, 256^2 x 384 km, no spot (scripts/network_statistics.py)"]
+    table.meta["comments"] = ["3-D Sun with network=True, 256^2 x 384 km, no spot",
+                              "made by scripts/network_statistics.py"]
     table.write(args.out / "network_statistics.ecsv", overwrite=True)
     print(table)
-    if args.figure is not None:
-        figure(args.figure)
 
 
 if __name__ == "__main__":

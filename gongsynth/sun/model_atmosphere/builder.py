@@ -353,7 +353,8 @@ def model_atmosphere(shape=(1024, 1024), pixel_size=96 * u.km, *, seed, nz=80,
                           element_flux_density, element_field, element_model, element_depression, canopy,
                           positive_fraction, internetwork_field, internetwork_horizontal_field,
                           umbra_radius, penumbra_radius, umbra_field, penumbra_field, umbra_model,
-                          evershed_speed, moat_speed, microturbulence, network, supergranule_size)).atmosphere()
+                          evershed_speed, moat_speed, microturbulence, network,
+                          supergranule_size)).atmosphere()
 
 
 def _plan(shape, pixel_size, seed, nz, height_range, spot, granule_size, granulation_models,

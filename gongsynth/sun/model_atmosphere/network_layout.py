@@ -43,8 +43,12 @@ import astropy.units as u
 import numpy as np
 
 from gongsynth.sun.photosphere.voronoi import cell_walls
-from gongsynth.sun.surface_field.network import (EPHEMERAL_FLUX, EPHEMERAL_FLUX_DENSITY, EPHEMERAL_SEPARATION,
-                                                 SupergranularNetwork)
+from gongsynth.sun.surface_field.network import (
+    EPHEMERAL_FLUX,
+    EPHEMERAL_FLUX_DENSITY,
+    EPHEMERAL_SEPARATION,
+    SupergranularNetwork,
+)
 
 __all__ = ["network_layout", "cell_centres", "LANE_WIDTH_KM", "MIN_SEPARATION"]
 
@@ -87,7 +91,7 @@ def cell_centres(grid, rng, spacing_km):
         off = (centres - c + box / 2) % box - box / 2
         if not len(centres) or np.min(np.hypot(off[:, 0], off[:, 1])) >= d_min:
             centres = np.vstack([centres, c])
-    raise ValueError(f"supergranule_size: could not place {n} cells {d_min:.0f} km apart")   # pragma: no cover
+    raise ValueError(f"supergranule_size: could not place {n} cells {d_min:.0f} km apart")
 
 
 def network_layout(grid, rng, cell_size_km, lanes, keep_out, ephemeral_flux_density=None):
@@ -137,8 +141,10 @@ def network_layout(grid, rng, cell_size_km, lanes, keep_out, ephemeral_flux_dens
         raise ValueError(f"supergranule_size must be a positive length, got {cell_size_km!r} km")
     if cell_size_km > min(grid.Lx, grid.Ly):
         raise ValueError(f"supergranule_size ({cell_size_km / 1e3:g} Mm) must fit in the box "
-                         f"({grid.Lx / 1e3:.1f} x {grid.Ly / 1e3:.1f} Mm): enlarge the box or shrink the cells")
-    b_er = EPHEMERAL_FLUX_DENSITY.to_value(u.G) if ephemeral_flux_density is None else float(ephemeral_flux_density)
+                         f"({grid.Lx / 1e3:.1f} x {grid.Ly / 1e3:.1f} Mm): enlarge the box or shrink "
+                         f"the cells")
+    b_er = (EPHEMERAL_FLUX_DENSITY.to_value(u.G) if ephemeral_flux_density is None
+            else float(ephemeral_flux_density))
     if not b_er >= 0:
         raise ValueError(f"ephemeral_flux_density must be >= 0 G, got {ephemeral_flux_density!r}")
     centres = cell_centres(grid, rng, float(cell_size_km))

@@ -128,7 +128,7 @@ def nearest_two(seeds, shape, spacing, box):
 
 def random_cells(grid, rng, spacing_km):
     """
-    Voronoi cells of random centres on a periodic grid: distance to the nearest wall and to the centre, cell index.
+    Voronoi cells of random centres on a periodic grid: distances to the nearest wall and centre, cell index.
 
     The wall between the nearest (s1) and second-nearest (s2) centre lies at
     distance (d2² - d1²) / (2 |s2 - s1|) from the point.
@@ -167,7 +167,7 @@ def random_cells(grid, rng, spacing_km):
 
 def cell_walls(grid, seeds):
     """
-    The Voronoi cells of given centres on a periodic grid: distance to the nearest wall and to the centre, cell index.
+    Voronoi cells of given centres on a periodic grid: distances to the nearest wall and centre, cell index.
 
     Parameters
     ----------
