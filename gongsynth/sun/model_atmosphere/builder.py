@@ -17,7 +17,9 @@ geometric grid (`~gongsynth.sun.model_atmosphere.stratification`):
 - **kG elements**: the network (or plage) flux-tube model of Solanki, sunk by
   the Wilson depression W that pressure balance P_int + B₀²/8π = P_ext at
   equal geometric height gives at the tube's τ = 1; weight f = |B_z|/B₀ of
-  the element field on that plane (a filling factor, ≤ 1);
+  the element field on that plane (a filling factor, ≤ 1); placed in the lanes,
+  clustered by noise or (``network=True``) on supergranular cell boundaries
+  (`~gongsynth.sun.model_atmosphere.network_layout`);
 - **sunspot**: Maltby et al. (1986) M umbra and the del Toro Iniesta et al.
   (1994) penumbra, each placed by the same pressure balance with the umbral /
   penumbral field strength.

@@ -5,7 +5,8 @@ Magnetic field: kG flux elements in the lanes, their potential spreading with he
   N(Φ) ∝ Φ^−1.85 on [1e17, 1e19] Mx (Parnell et al. 2009), each a Gaussian
   of peak ``B0`` (the field at the element's own τ = 1, ~1.5 kG) and width
   σ = √(Φ / 2πB0), placed in intergranular lanes (with large-scale
-  clustering, as the network), both polarities.  The result is B_z on the
+  clustering, or on supergranular boundaries:
+  `gongsynth.sun.model_atmosphere.network_layout`), both polarities.  The result is B_z on the
   element base plane: the element's Wilson-depressed τ = 1 level.
 - **Spreading with height**: above its base plane a flux distribution is
   continued as a potential field, B̂(k, z) = B̂_z(k, z_b) e^{−k(z−z_b)} with
