@@ -82,7 +82,7 @@ _DOCS = {
                    "the effective area of that observation (false: the instrument's effective_area)",
     "network": "full-disk mode: lay the magnetic network on supergranular cells over the large-scale field "
                "(true; false: the field as it is; unset: on for the synthetic and quiet Suns, off over an "
-               "observed map, which holds the Sun's own network)",
+               "observed map, which holds the Sun's own network); tiled mode: see [photosphere] network",
 }
 
 
@@ -360,7 +360,9 @@ class SimulationConfig:
         (`gongsynth.sun.surface_field.network`) over the large-scale field.
         Default (None): on for the ``"synthetic"`` and ``"quiet"`` surface
         fields, off over an observed map (it holds the Sun's own network;
-        see `network_on`); no effect in tiled mode.
+        see `network_on`); no effect in tiled mode, whose 3-D Sun has its
+        own switch, ``[photosphere] network``
+        (`gongsynth.sun.model_atmosphere.network_layout`).
     pointing : tuple of `~astropy.units.Quantity`
         Full-disk mode: helioprojective (Tx, Ty) of the detector's centre
         (default (0, 0): the Sun's centre on the detector's centre; a real

@@ -17,7 +17,9 @@ geometric grid (`~gongsynth.sun.model_atmosphere.stratification`):
 - **kG elements**: the network (or plage) flux-tube model of Solanki, sunk by
   the Wilson depression W that pressure balance P_int + B₀²/8π = P_ext at
   equal geometric height gives at the tube's τ = 1; weight f = |B_z|/B₀ of
-  the element field on that plane (a filling factor, ≤ 1);
+  the element field on that plane (a filling factor, ≤ 1); placed in the lanes,
+  clustered by noise or (``network=True``) on supergranular cell boundaries
+  (`~gongsynth.sun.model_atmosphere.network_layout`);
 - **sunspot**: Maltby et al. (1986) M umbra and the del Toro Iniesta et al.
   (1994) penumbra, each placed by the same pressure balance with the umbral /
   penumbral field strength.
@@ -43,6 +45,7 @@ from gongsynth.seeding import as_seed_sequence, stage_generator
 from gongsynth.sun.model_atmosphere import flux_elements as fe
 from gongsynth.sun.model_atmosphere import stratification as st
 from gongsynth.sun.model_atmosphere.granulation import PeriodicGrid, anelastic_profile, granulation_pattern
+from gongsynth.sun.model_atmosphere.network_layout import network_layout
 from gongsynth.sun.model_atmosphere.sunspot import spot_structure
 from gongsynth.sun.rt.eos import solve_state
 from gongsynth.threads import run_chunks
@@ -58,7 +61,7 @@ UMBRA_MODELS = {"maltby-m": "umbra_m", "maltby-e": "umbra_e"}
 #: Thermal weights a tabulated (interpolated linearly in between; a is clipped to this range).
 _A_TABLE = np.linspace(-4.0, 4.0, 33)
 # Random sub-streams: each ingredient its own, so switching one off leaves the others unchanged.
-_GRANULES, _ELEMENTS, _INTERNETWORK, _SPOT = range(4)
+_GRANULES, _ELEMENTS, _INTERNETWORK, _SPOT, _NETWORK = range(5)
 
 
 @functools.lru_cache(maxsize=8)
@@ -249,7 +252,7 @@ def model_atmosphere(shape=(1024, 1024), pixel_size=96 * u.km, *, seed, nz=80,
                      internetwork_horizontal_field=50 * u.G, umbra_radius=7 * u.Mm,
                      penumbra_radius=16 * u.Mm, umbra_field=3000 * u.G, penumbra_field=1500 * u.G,
                      umbra_model="maltby-m", evershed_speed=2.0 * u.km / u.s, moat_speed=0.8 * u.km / u.s,
-                     microturbulence=0.6 * u.km / u.s):
+                     microturbulence=0.6 * u.km / u.s, network=False, supergranule_size=30 * u.Mm):
     """
     A seeded, horizontally periodic 3-D model photosphere for LTE Stokes synthesis.
 
@@ -316,6 +319,15 @@ def model_atmosphere(shape=(1024, 1024), pixel_size=96 * u.km, *, seed, nz=80,
         Peak Evershed (2 km/s) and moat (0.8 km/s) outflows.
     microturbulence : `~astropy.units.Quantity`, optional
         Added unresolved velocity (default 0: the 3-D flow broadens the line).
+    network : bool, optional
+        Lay the kG elements on the boundaries of periodic supergranular cells,
+        with ephemeral bipoles inside the cells
+        (`~gongsynth.sun.model_atmosphere.network_layout`); default False: in
+        the lanes, clustered by a ~5 Mm noise field (the calibration tables
+        were built so; the default flips when they are rebuilt).
+    supergranule_size : `~astropy.units.Quantity`, optional
+        With ``network``: mean spacing of the cell centres (30 Mm, Rieutord &
+        Rincon 2010); it must fit in the box.
 
     Returns
     -------
@@ -343,14 +355,16 @@ def model_atmosphere(shape=(1024, 1024), pixel_size=96 * u.km, *, seed, nz=80,
                           element_flux_density, element_field, element_model, element_depression, canopy,
                           positive_fraction, internetwork_field, internetwork_horizontal_field,
                           umbra_radius, penumbra_radius, umbra_field, penumbra_field, umbra_model,
-                          evershed_speed, moat_speed, microturbulence)).atmosphere()
+                          evershed_speed, moat_speed, microturbulence, network,
+                          supergranule_size)).atmosphere()
 
 
 def _plan(shape, pixel_size, seed, nz, height_range, spot, granule_size, granulation_models,
           granulation_amplitude, granulation_velocity, velocity_decay_height, element_flux_density,
           element_field, element_model, element_depression, canopy, positive_fraction, internetwork_field,
           internetwork_horizontal_field, umbra_radius, penumbra_radius, umbra_field, penumbra_field,
-          umbra_model, evershed_speed, moat_speed, microturbulence):
+          umbra_model, evershed_speed, moat_speed, microturbulence, network=False,
+          supergranule_size=30 * u.Mm):
     """`model_atmosphere`'s arguments checked and its whole-plane (2-D) ingredients made, as a dict."""
     if (not isinstance(shape, (tuple, list)) or len(shape) != 2
             or not all(isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 8
@@ -367,7 +381,7 @@ def _plan(shape, pixel_size, seed, nz, height_range, spot, granule_size, granula
     if not (z_lo <= -200 and z_hi >= 400):
         raise ValueError(f"height_range must reach at least 200 km below and 400 km above tau = 1, got "
                          f"{height_range}")
-    for name, value in (("element_depression", element_depression), ("canopy", canopy)):
+    for name, value in (("element_depression", element_depression), ("canopy", canopy), ("network", network)):
         if not isinstance(value, (bool, np.bool_)):
             raise ValueError(f"{name} must be True or False, got {value!r}")
     if spot not in (True, False, "auto"):
@@ -391,6 +405,7 @@ def _plan(shape, pixel_size, seed, nz, height_range, spot, granule_size, granula
     v_e = check_scalar(evershed_speed, u.km / u.s, "evershed_speed", positive=False)
     v_m = check_scalar(moat_speed, u.km / u.s, "moat_speed", positive=False)
     v_t = check_scalar(microturbulence, u.km / u.s, "microturbulence", positive=False)
+    sg = check_scalar(supergranule_size, u.km, "supergranule_size")
     for name, value in (("element_field", b_el), ("umbra_field", b_u), ("penumbra_field", b_p)):
         if value > 6000:
             raise ValueError(f"{name} must be <= 6000 G, got {value} G")
@@ -420,12 +435,17 @@ def _plan(shape, pixel_size, seed, nz, height_range, spot, granule_size, granula
                   cos=zeros, sin=zeros, mask=zeros)
         keep_out = np.ones((ny, nx))
 
-    # kG elements in the lanes, clustered on ~5 Mm scales like the network.
+    # kG elements in the lanes: on supergranular boundaries (network), or clustered on ~5 Mm scales.
     rng = stage_generator(root, "model_atmosphere", _ELEMENTS)
     fluxes = fe.power_law_fluxes(rng, flux * grid.Lx * grid.Ly * 1e10)
     signs = np.where(rng.uniform(size=fluxes.size) < pos, 1.0, -1.0)
-    cluster = np.maximum(grid.noise(rng, 2500.0), 0.0) + 0.2
-    bz_el = fe.render_elements(grid, rng, lanes * cluster * keep_out + 1e-12, fluxes, signs, b_el)
+    if network:
+        lay = network_layout(grid, stage_generator(root, "model_atmosphere", _NETWORK), sg, lanes, keep_out)
+        bz_el = fe.render_elements(grid, rng, lay["weight"], fluxes, signs, b_el)
+        bz_el += fe.render_elements(grid, rng, None, lay["fluxes"], lay["signs"], b_el, where=lay["where"])
+    else:
+        cluster = np.maximum(grid.noise(rng, 2500.0), 0.0) + 0.2
+        bz_el = fe.render_elements(grid, rng, lanes * cluster * keep_out + 1e-12, fluxes, signs, b_el)
     spot_w = sp["umbra"] + sp["penumbra"]
     f_el = np.clip(np.abs(bz_el) / b_el, 0.0, 1.0) * (1 - spot_w)
 
@@ -470,6 +490,9 @@ def _plan(shape, pixel_size, seed, nz, height_range, spot, granule_size, granula
                    "umbra_field_G": b_u, "penumbra_field_G": b_p, "umbra_model": umbra_model,
                    "evershed_speed_km_s": v_e, "moat_speed_km_s": v_m, "microturbulence_km_s": v_t},
     }
+    if network:     # only then: the default's metadata stays as it was
+        meta["params"].update(network=True, supergranule_size_km=sg)
+        meta["network"] = {"cells": lay["cells"], "ephemeral_regions": lay["fluxes"].size // 2}
     # Per-row planes (indexed by the kernels' row j), then the height profiles and tables.
     return dict(grid=grid, z=zg, pixel_size=px, microturbulence=v_t, meta=meta, spectra=spectra, bases=bases,
                 base_field=None if canopy else bz_el,
@@ -479,7 +502,8 @@ def _plan(shape, pixel_size, seed, nz, height_range, spot, granule_size, granula
                               ref["umbra_t"], np.exp(ref["umbra_lnp"]), ref["penumbra_t"],
                               np.exp(ref["penumbra_lnp"])),
                 flow=(vz0, gx, gy, sp["vx"], sp["vy"]), flow_profiles=(h, s, flows),
-                internetwork=(ax, ay, dazdx, dazdy, curl), internetwork_profiles=(c, dc))
+                internetwork=(ax, ay, dazdx, dazdy, curl), internetwork_profiles=(c, dc),
+                network_wall=lay["wall"] if network else None)
 
 
 def model_sun(*args, **kwargs):

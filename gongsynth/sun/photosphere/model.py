@@ -46,7 +46,7 @@ import scipy.fft
 
 from gongsynth.seeding import as_seed_sequence, stage_generator
 from gongsynth.sun.photosphere.columns import Photosphere
-from gongsynth.sun.photosphere.voronoi import nearest_two
+from gongsynth.sun.photosphere.voronoi import random_cells
 from gongsynth.validation import check_scalar
 
 __all__ = ["model_photosphere"]
@@ -112,25 +112,6 @@ class _Grid:
         g = scipy.fft.irfft2(f, s=(self.ny, self.nx), workers=-1)
         g -= g.mean()
         return g / (g.std() or 1.0)
-
-
-def _cells(grid, rng, spacing_km):
-    """
-    Voronoi cells of random centres: distance to the nearest wall and to the centre, cell index.
-
-    The wall between the nearest (s1) and second-nearest (s2) centre lies at
-    distance (d2² - d1²) / (2 |s2 - s1|) from the point.
-    """
-    n = max(3, int(rng.poisson(grid.Lx * grid.Ly / spacing_km ** 2)))
-    seeds = np.column_stack([rng.uniform(0, grid.Lx, n), rng.uniform(0, grid.Ly, n)])
-    # The same numbers as a periodic k-d tree query (k=2), at about half the cost.
-    d, idx = nearest_two(seeds, (grid.ny, grid.nx), grid.dx, (grid.Lx, grid.Ly))
-    sep = seeds[idx[:, 1]] - seeds[idx[:, 0]]
-    sep[:, 0] = (sep[:, 0] + grid.Lx / 2) % grid.Lx - grid.Lx / 2
-    sep[:, 1] = (sep[:, 1] + grid.Ly / 2) % grid.Ly - grid.Ly / 2
-    wall = (d[:, 1] ** 2 - d[:, 0] ** 2) / (2 * np.hypot(sep[:, 0], sep[:, 1]))
-    shape = (grid.ny, grid.nx)
-    return wall.reshape(shape), d[:, 0].reshape(shape), idx[:, 0].reshape(shape), n
 
 
 def _standardise(a):
@@ -393,7 +374,7 @@ def model_photosphere(*, shape=(1024, 1024), pixel_size=96 * u.km, seed=0, spot=
 
     # ---- granulation: bright upflowing cell interiors, dark downflowing lanes
     rng = stage_generator(root, "photosphere", _GRANULES)
-    wall, centre, cell, n_cells = _cells(grid, rng, gran)
+    wall, centre, cell, n_cells = random_cells(grid, rng, gran)
     amplitude = rng.lognormal(0.0, 0.25, n_cells)
     # Brightest at the cell centre, flat-topped, dropping steeply into the lanes.
     profile = 1.0 - (centre / (centre + wall)) ** 3
@@ -414,7 +395,7 @@ def model_photosphere(*, shape=(1024, 1024), pixel_size=96 * u.km, seed=0, spot=
 
     # ---- supergranulation and network
     rng = stage_generator(root, "photosphere", _SUPERGRANULES)
-    sg_wall, _, sg_cell, _ = _cells(grid, rng, sg)
+    sg_wall, _, sg_cell, _ = random_cells(grid, rng, sg)
     sgx, sgy = grid.gradient(grid.smooth(-np.exp(-sg_wall / (0.15 * sg)), 0.05 * sg))
     norm = np.sqrt(np.mean(sgx ** 2 + sgy ** 2)) or 1.0
     vx_g -= 0.3 * sgx / norm          # 0.3 km/s outflow from the supergranule centres
