@@ -35,6 +35,7 @@ from pathlib import Path
 import astropy.units as u
 import numpy as np
 import sunpy.map
+import tomlkit
 from astropy.io import fits
 
 from gongsynth.config import SimulationConfig
@@ -42,14 +43,20 @@ from gongsynth.files import atomic_path
 from gongsynth.pipeline import simulate, simulate_each
 from gongsynth.version import version as __version__
 
-__all__ = ["RUN_MAPS", "RUN_THREADS", "CachedRun", "run_config", "run_key", "entry_path", "run_entry",
-           "read_entry", "cached_runs"]
+__all__ = ["RUN_MAPS", "RUN_THREADS", "INERT_KNOBS", "CachedRun", "run_config", "run_key", "entry_path",
+           "run_entry", "read_entry", "cached_runs"]
 
 #: The maps of a run that a cache entry keeps (`~gongsynth.pipeline.SimulationResult` attributes).
 RUN_MAPS = ("magnetogram", "continuum", "truth", "truth_psf")
 
 #: Threads of a run whose configuration leaves ``workers`` unset (see the module notes).
 RUN_THREADS = 1
+
+#: Sun knobs (``[photosphere]``) added after runs were cached, with the value at which each leaves a
+#: run's output as it was before it existed, and the knobs that act only through it: the tiled 3-D
+#: Sun's supergranular network (off by default) and its cell size.  `run_key` leaves them out at that
+#: value, so runs cached before the switch existed keep their keys.
+INERT_KNOBS = {"network": (False, ("supergranule_size",))}
 
 #: FITS structure keywords of an extension, dropped from a map's metadata when it is read back.
 _STRUCTURE = ("XTENSION", "PCOUNT", "GCOUNT", "EXTNAME")
@@ -126,7 +133,13 @@ def run_key(config):
     >>> run_key(base) == run_key(SimulationConfig(seed=1)), run_key(base) == run_key(base.replace(seed=2))
     (True, False)
     """
-    text = f"gongsynth {__version__}\n{run_config(config).to_toml(comments=False)}"
+    document = tomlkit.parse(run_config(config).to_toml(comments=False))
+    knobs = document["photosphere"]
+    for name, (inert, dependents) in INERT_KNOBS.items():
+        if name in knobs and knobs[name] == inert:
+            for key in (name, *dependents):
+                knobs.pop(key, None)
+    text = f"gongsynth {__version__}\n{tomlkit.dumps(document)}"
     return hashlib.sha256(text.encode()).hexdigest()[:20]
 
 

@@ -62,6 +62,20 @@ def test_the_key_is_the_whole_configuration_and_the_version(monkeypatch):
     assert run_key(base) != key
 
 
+def test_an_inert_switch_at_its_inert_value_leaves_the_key_as_before_it_existed():
+    base = SimulationConfig(seed=1)
+    text = run_cache.run_config(base).to_toml(comments=False)
+    assert "network = false" in text       # the switch is in the configuration ...
+    off = base.replace(photosphere={"network": False, "supergranule_size": 20 * u.Mm})
+    assert run_key(off) == run_key(base)   # ... but not in the key while it is off
+    on = base.replace(photosphere={"network": True})
+    assert run_key(on) != run_key(base)
+    assert run_key(on.replace(photosphere={"network": True, "supergranule_size": 20 * u.Mm})) != run_key(on)
+    # The Milne-Eddington Sun's own supergranule size has no such switch: it stays in the key.
+    me = SimulationConfig(seed=1, sun="milne-eddington")
+    assert run_key(me.replace(photosphere={"supergranule_size": 20 * u.Mm})) != run_key(me)
+
+
 def test_the_cache_recomputes_only_missing_entries_with_the_same_bits(tmp_path, serial_build, counted):
     serial_table, folder = serial_build
     assert len(entries(folder)) == 3 and not list(folder.glob(".*"))  # no temporary left behind
