@@ -30,6 +30,10 @@ Default output: ``calibration_default.ecsv`` (GONG, paper grid),
 ``calibration_run_grid.ecsv`` (GONG, run grid), ``calibration_hmi.ecsv``
 (HMI, paper grid), ``calibration_hmi_run_grid.ecsv`` (HMI, run grid).
 
+``--systematic-only TABLE`` fits nothing: it (re)computes the ``systematic``
+column of a table already built, from the instrument's ensemble (how the
+shipped tables got their per-angle bands once the ensembles were run).
+
 How to regenerate the shipped tables from a cache of the runs (nothing is
 simulated when the cache holds them all; ``--check-cache`` only lists what is
 cached and what is missing)::
@@ -37,6 +41,7 @@ cached and what is missing)::
     python scripts/build_default_calibration_table.py --grid run --cache RUNS-256 --overwrite
     python scripts/build_default_calibration_table.py --instrument hmi --cache RUNS-1024 --overwrite
     python scripts/build_default_calibration_table.py --instrument gong --cache RUNS-1024 --overwrite \
+        --members large-umbra small-spot \
         --rst docs/guide/calibration_tables.txt \
         --compare "run grid=gongsynth/data/calibration_run_grid.ecsv" \
                   "HMI, paper grid=gongsynth/data/calibration_hmi.ecsv"
@@ -164,6 +169,9 @@ def main(argv=None):
                         help="ensemble weak-flux table (ECSV; default: the instrument's, ENSEMBLES)")
     parser.add_argument("--members", nargs="+", default=list(MEMBERS), help="accepted ensemble members")
     parser.add_argument("--no-systematic", action="store_true", help="leave out the systematic column")
+    parser.add_argument("--systematic-only", type=Path, metavar="TABLE",
+                        help="fit nothing: (re)write the systematic column of this built table from the "
+                             "ensemble (to --out, default the table itself)")
     parser.add_argument("--cache", type=Path, help="folder of the finished runs (resumable build)")
     parser.add_argument("--check-cache", action="store_true",
                         help="only list the runs the cache holds and those missing; simulate nothing")
@@ -187,7 +195,7 @@ def main(argv=None):
             print(f"{'cached ' if path.exists() else 'MISSING'} {path.name}")
         print(f"{missing} of {len(latitudes) * len(seeds)} runs missing")
         return 1 if missing else 0
-    out = args.out or default_out(args.instrument, args.grid)
+    out = args.out or args.systematic_only or default_out(args.instrument, args.grid)
     if out.exists() and not args.overwrite:
         parser.error(f"{out} exists: pass --overwrite to replace it")
     args.ensemble = args.ensemble or ENSEMBLES[args.instrument]
@@ -201,9 +209,13 @@ def main(argv=None):
 
         client = (Client(scheduler_file=args.scheduler) if Path(args.scheduler).is_file()
                   else Client(args.scheduler))
-    table = build_calibration_table(latitudes, seeds=seeds, n_boot=args.n_boot, progress=True,
-                                    cache=args.cache,
-                                    workers=args.workers, client=client, **kwargs)
+    if args.systematic_only:
+        table = read_calibration_table(args.systematic_only)
+        if table.meta.get("instrument_name", "gong") != args.instrument:
+            parser.error(f"--systematic-only {args.systematic_only} is not a {args.instrument.upper()} table")
+    else:
+        table = build_calibration_table(latitudes, seeds=seeds, n_boot=args.n_boot, progress=True,
+                                        cache=args.cache, workers=args.workers, client=client, **kwargs)
     if changes is not None:
         latitudes = " ".join(f"{x:g}" for x in sorted(set(changes["latitude"].to_value(u.deg))))
         source = (f"{args.ensemble.name}: {args.instrument.upper()} quiet-Sun factor, 256^2 columns of "
