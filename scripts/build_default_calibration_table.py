@@ -211,6 +211,7 @@ def main(argv=None):
                   else Client(args.scheduler))
     if args.systematic_only:
         table = read_calibration_table(args.systematic_only)
+        table.meta.pop("source", None)  # read_calibration_table's note of the file read, not a property
         if table.meta.get("instrument_name", "gong") != args.instrument:
             parser.error(f"--systematic-only {args.systematic_only} is not a {args.instrument.upper()} table")
     else:
