@@ -33,7 +33,8 @@ The numbers of ``docs/guide/sun_ensemble.rst`` came from::
 (``--rst`` also writes the tables the guide page includes.  The GONG six-angle ensemble has only the
 two spot variants, which set the band: plage-elements and maltby-e-umbra, run at 0 and 60 deg
 before, changed the factor by under 0.01; the CPU ran out before their six-angle runs.)  The
-constraints take ~30 s of CPU per variant; a GONG run ~18 s of CPU, an HMI run ~25 s, one per variant, latitude and seed.
+constraints take ~30 s of CPU per variant; a GONG run ~18 s of CPU, an HMI run ~25 s, one per
+variant, latitude and seed.
 """
 import argparse
 import datetime

@@ -536,7 +536,7 @@ def weak_flux_factor_difference(first, second, *, region="quiet", n_bins=None, m
 
 
 def _pooled(results, region, psf, block):
-    """A latitude's region pixels of one or several runs, their bootstrap block names, and the number of runs."""
+    """One latitude's region pixels of the runs, their bootstrap block names, and the number of runs."""
     results = [results] if hasattr(results, "magnetogram") else list(results)
     if not results:
         raise ValueError("results is empty")
