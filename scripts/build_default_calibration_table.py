@@ -47,7 +47,18 @@ cached and what is missing)::
                   "HMI, paper grid=gongsynth/data/calibration_hmi.ecsv"
 
 (the last writes the guide's table of the quiet-Sun factors; leave out a
-``--compare`` table not built yet).
+``--compare`` table not built yet).  The shipped tables of issue 24 were fitted
+with ``--no-systematic`` and then given their bands without refitting::
+
+    python scripts/build_default_calibration_table.py --instrument hmi --systematic-only TABLE \
+        --out gongsynth/data/calibration_hmi.ecsv --overwrite
+    python scripts/build_default_calibration_table.py --grid run --systematic-only TABLE \
+        --members large-umbra small-spot --out gongsynth/data/calibration_run_grid.ecsv --overwrite
+    python scripts/build_default_calibration_table.py --systematic-only TABLE \
+        --members large-umbra small-spot \
+        --out gongsynth/data/calibration_default.ecsv --overwrite --rst docs/guide/calibration_tables.txt \
+        --compare "run grid=gongsynth/data/calibration_run_grid.ecsv" \
+                  "HMI, paper grid=gongsynth/data/calibration_hmi.ecsv"
 
 Same gongsynth version, same seeds: the same numbers, bit for bit (only the
 ``created`` date in the metadata differs), whatever the number of workers.
