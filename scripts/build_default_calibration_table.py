@@ -18,16 +18,21 @@ resamples).  Two grids of the Sun's columns:
 The factor and the curves are the fit pooled over the seeds; ``uncertainty``
 is the statistical uncertainty from the seeds' scatter and the bootstrap
 (`gongsynth.analysis.calibration_table.seed_uncertainty`); ``systematic`` the
-band of the Sun-model ensemble (``--ensemble``, default
-``docs/guide/sun_ensemble_weak_flux.ecsv``: GONG, 256² runs at 0 and 60 deg,
-seeds 1 2, made by ``scripts/sun_ensemble.py``; members ``--members``, by
+band of the Sun-model ensemble of the same instrument (``--ensemble``,
+default ``docs/guide/sun_ensemble_weak_flux.ecsv`` for GONG and
+``docs/guide/sun_ensemble_weak_flux_hmi.ecsv`` for HMI: 256² runs at the six
+angles, made by ``scripts/sun_ensemble.py``; members ``--members``, by
 default those the guide's sun_ensemble page accepts; rule in
-`gongsynth.analysis.calibration_table.SYSTEMATIC_RULE`).  For HMI the GONG
-ensemble's band is used (no HMI ensemble was run), as the metadata says.
+`gongsynth.analysis.calibration_table.SYSTEMATIC_RULE`).  The metadata name
+the ensemble's instrument, grid and seeds.
 
 Default output: ``calibration_default.ecsv`` (GONG, paper grid),
 ``calibration_run_grid.ecsv`` (GONG, run grid), ``calibration_hmi.ecsv``
 (HMI, paper grid), ``calibration_hmi_run_grid.ecsv`` (HMI, run grid).
+
+``--systematic-only TABLE`` fits nothing: it (re)computes the ``systematic``
+column of a table already built, from the instrument's ensemble (how the
+shipped tables got their per-angle bands once the ensembles were run).
 
 How to regenerate the shipped tables from a cache of the runs (nothing is
 simulated when the cache holds them all; ``--check-cache`` only lists what is
@@ -36,12 +41,24 @@ cached and what is missing)::
     python scripts/build_default_calibration_table.py --grid run --cache RUNS-256 --overwrite
     python scripts/build_default_calibration_table.py --instrument hmi --cache RUNS-1024 --overwrite
     python scripts/build_default_calibration_table.py --instrument gong --cache RUNS-1024 --overwrite \
+        --members large-umbra small-spot \
         --rst docs/guide/calibration_tables.txt \
         --compare "run grid=gongsynth/data/calibration_run_grid.ecsv" \
                   "HMI, paper grid=gongsynth/data/calibration_hmi.ecsv"
 
 (the last writes the guide's table of the quiet-Sun factors; leave out a
-``--compare`` table not built yet).
+``--compare`` table not built yet).  The shipped tables of issue 24 were fitted
+with ``--no-systematic`` and then given their bands without refitting::
+
+    python scripts/build_default_calibration_table.py --instrument hmi --systematic-only TABLE \
+        --out gongsynth/data/calibration_hmi.ecsv --overwrite
+    python scripts/build_default_calibration_table.py --grid run --systematic-only TABLE \
+        --members large-umbra small-spot --out gongsynth/data/calibration_run_grid.ecsv --overwrite
+    python scripts/build_default_calibration_table.py --systematic-only TABLE \
+        --members large-umbra small-spot \
+        --out gongsynth/data/calibration_default.ecsv --overwrite --rst docs/guide/calibration_tables.txt \
+        --compare "run grid=gongsynth/data/calibration_run_grid.ecsv" \
+                  "HMI, paper grid=gongsynth/data/calibration_hmi.ecsv"
 
 Same gongsynth version, same seeds: the same numbers, bit for bit (only the
 ``created`` date in the metadata differs), whatever the number of workers.
@@ -84,7 +101,9 @@ GRIDS = {
 #: the umbral-area range like the default; maltby-e-umbra is excluded (Wilson depression, umbral area).
 MEMBERS = ("plage-elements", "large-umbra", "small-spot")
 
-ENSEMBLE = ROOT / "docs" / "guide" / "sun_ensemble_weak_flux.ecsv"
+#: Each instrument's ensemble table (``scripts/sun_ensemble.py --weak-flux``).
+ENSEMBLES = {"gong": ROOT / "docs" / "guide" / "sun_ensemble_weak_flux.ecsv",
+             "hmi": ROOT / "docs" / "guide" / "sun_ensemble_weak_flux_hmi.ecsv"}
 
 #: Paper III's statement on the quiet-Sun factor (more than 2 at disk centre, about 1 near the limb).
 PAPER_III = {0.0: "> 2", 75.0: "≈ 1"}
@@ -157,9 +176,13 @@ def main(argv=None):
     parser.add_argument("--out", type=Path, help="output ECSV (default: the shipped file)")
     parser.add_argument("--overwrite", action="store_true")
     parser.add_argument("--sun", choices=("model-atmosphere", "milne-eddington"))
-    parser.add_argument("--ensemble", type=Path, default=ENSEMBLE, help="ensemble weak-flux table (ECSV)")
+    parser.add_argument("--ensemble", type=Path,
+                        help="ensemble weak-flux table (ECSV; default: the instrument's, ENSEMBLES)")
     parser.add_argument("--members", nargs="+", default=list(MEMBERS), help="accepted ensemble members")
     parser.add_argument("--no-systematic", action="store_true", help="leave out the systematic column")
+    parser.add_argument("--systematic-only", type=Path, metavar="TABLE",
+                        help="fit nothing: (re)write the systematic column of this built table from the "
+                             "ensemble (to --out, default the table itself)")
     parser.add_argument("--cache", type=Path, help="folder of the finished runs (resumable build)")
     parser.add_argument("--check-cache", action="store_true",
                         help="only list the runs the cache holds and those missing; simulate nothing")
@@ -183,24 +206,33 @@ def main(argv=None):
             print(f"{'cached ' if path.exists() else 'MISSING'} {path.name}")
         print(f"{missing} of {len(latitudes) * len(seeds)} runs missing")
         return 1 if missing else 0
-    out = args.out or default_out(args.instrument, args.grid)
+    out = args.out or args.systematic_only or default_out(args.instrument, args.grid)
     if out.exists() and not args.overwrite:
         parser.error(f"{out} exists: pass --overwrite to replace it")
+    args.ensemble = args.ensemble or ENSEMBLES[args.instrument]
     changes = None if args.no_systematic else QTable.read(args.ensemble, format="ascii.ecsv")
+    if changes is not None and changes.meta.get("instrument", "gong") != args.instrument:
+        parser.error(f"--ensemble {args.ensemble} is a {changes.meta.get('instrument', 'gong').upper()} "
+                     f"ensemble, not {args.instrument.upper()}'s")
     client = None
     if args.scheduler:
         from dask.distributed import Client
 
         client = (Client(scheduler_file=args.scheduler) if Path(args.scheduler).is_file()
                   else Client(args.scheduler))
-    table = build_calibration_table(latitudes, seeds=seeds, n_boot=args.n_boot, progress=True,
-                                    cache=args.cache,
-                                    workers=args.workers, client=client, **kwargs)
+    if args.systematic_only:
+        table = read_calibration_table(args.systematic_only)
+        table.meta.pop("source", None)  # read_calibration_table's note of the file read, not a property
+        if table.meta.get("instrument_name", "gong") != args.instrument:
+            parser.error(f"--systematic-only {args.systematic_only} is not a {args.instrument.upper()} table")
+    else:
+        table = build_calibration_table(latitudes, seeds=seeds, n_boot=args.n_boot, progress=True,
+                                        cache=args.cache, workers=args.workers, client=client, **kwargs)
     if changes is not None:
-        source = (f"{args.ensemble.name}: GONG quiet-Sun factor, 256^2 columns of 384 km, seeds "
-                  f"{list(changes.meta.get('seeds', []))}, gongsynth {changes.meta.get('gongsynth_version')}")
-        if args.instrument != "gong":
-            source += f"; used for {args.instrument.upper()} (no {args.instrument.upper()} ensemble run)"
+        latitudes = " ".join(f"{x:g}" for x in sorted(set(changes["latitude"].to_value(u.deg))))
+        source = (f"{args.ensemble.name}: {args.instrument.upper()} quiet-Sun factor, 256^2 columns of "
+                  f"384 km, latitudes {latitudes} deg, seeds {list(changes.meta.get('seeds', []))}, "
+                  f"gongsynth {changes.meta.get('gongsynth_version')}")
         add_systematic(table, changes, args.members, source=source)
     write_calibration_table(table, out, overwrite=args.overwrite)
     if args.rst:

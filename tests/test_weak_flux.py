@@ -87,6 +87,30 @@ def test_regions_and_factor_of_a_simulation():
         weak_flux_factor(result, region="plage")
 
 
+def _mixture_sample(rng, n):
+    # Quiet-Sun-like truth: a narrow Gaussian core and Laplace wings (so E[truth | measured]
+    # is curved and the slope at zero depends on where the inner bins end); measured = truth/2 + noise.
+    narrow = rng.random(n) < 0.85
+    truth = np.where(narrow, rng.normal(0, 15, n), rng.laplace(0, 120, n))
+    return truth / 2 + rng.normal(0, 6, n), truth
+
+
+def test_pooling_keeps_the_estimand_when_min_outer_counts_per_run():
+    """K samples pooled with min_outer × K estimate what each sample's own fit estimates (the inner
+    edge sits at the same quantile); the reference is 24 samples pooled the same way."""
+    rng = np.random.default_rng(7)
+    n, k = 15_000, 4
+    samples = [_mixture_sample(rng, n) for _ in range(24)]
+    pooled = np.concatenate(samples[:k], axis=1)
+    reference = flux_conserving_fit(*np.concatenate(samples, axis=1), 35, min_outer=400 * 24).slope_at_zero
+    per_run = [flux_conserving_fit(m, t, 35).slope_at_zero for m, t in samples[:k]]
+    error = np.std(per_run, ddof=1) / np.sqrt(k)   # standard error of the per-run mean (~0.01)
+    per_run_rule = flux_conserving_fit(*pooled, 35, min_outer=400 * k).slope_at_zero
+    assert np.mean(per_run) == pytest.approx(reference, abs=3 * error)
+    assert per_run_rule == pytest.approx(reference, abs=3 * error)
+    assert per_run_rule == pytest.approx(np.mean(per_run), abs=error)
+
+
 def test_paired_difference_of_two_runs():
     """Same pixels, truth scaled by 1.5: the factor scales exactly (the fit is linear in the truth, to
     float32 round-off), and the paired bootstrap sees the same blocks as the single one, so both numbers
@@ -107,6 +131,13 @@ def test_paired_difference_of_two_runs():
     assert difference == pytest.approx(0.5 * single.factor, rel=1e-6)     # the maps are float32
     assert uncertainty == pytest.approx(0.5 * single.uncertainty, rel=1e-6)
     assert weak_flux_factor_difference(result, result, n_boot=20) == (0.0, 0.0)
+    # min_outer counts per run: pooling copies of one run puts the bins, and so the factor, exactly
+    # where the run's own fit has them (a fixed count would move the inner edge outward).
+    copies = weak_flux_factor([result] * 3, n_boot=0)
+    assert copies.factor == pytest.approx(single.factor, rel=1e-9)
+    assert np.array_equal(copies.curve.edges, single.curve.edges)
+    assert weak_flux_factor_difference([result] * 3, [scaled] * 3, n_boot=0)[0] == pytest.approx(difference,
+                                                                                                rel=1e-9)
     other = gongsynth.simulate(seed=5, detector_shape=24, latitude=30 * u.deg, **coarse)
     with pytest.raises(ValueError, match="latitude"):
         weak_flux_factor_difference(result, other)
