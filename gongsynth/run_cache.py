@@ -133,14 +133,19 @@ def run_key(config):
     >>> run_key(base) == run_key(SimulationConfig(seed=1)), run_key(base) == run_key(base.replace(seed=2))
     (True, False)
     """
-    document = tomlkit.parse(run_config(config).to_toml(comments=False))
-    knobs = document["photosphere"]
+    text = f"gongsynth {__version__}\n{_keyed(run_config(config).to_toml(comments=False))}"
+    return hashlib.sha256(text.encode()).hexdigest()[:20]
+
+
+def _keyed(toml):
+    """A run's configuration TOML without the `INERT_KNOBS` at their inert values (what identifies a run)."""
+    document = tomlkit.parse(toml)
+    knobs = document.get("photosphere", {})
     for name, (inert, dependents) in INERT_KNOBS.items():
         if name in knobs and knobs[name] == inert:
             for key in (name, *dependents):
                 knobs.pop(key, None)
-    text = f"gongsynth {__version__}\n{tomlkit.dumps(document)}"
-    return hashlib.sha256(text.encode()).hexdigest()[:20]
+    return tomlkit.dumps(document)
 
 
 def entry_path(folder, config):
@@ -226,8 +231,8 @@ def read_entry(entry, config):
             # astropy only warns about a truncated or damaged file: here that makes it no entry.
             warnings.simplefilter("error")
             with fits.open(io.BytesIO(data)) as hdus:
-                stored = hdus["CONFIG"].data.tobytes().decode()
-                expected = run_config(config).to_toml(comments=False)
+                stored = _keyed(hdus["CONFIG"].data.tobytes().decode())
+                expected = _keyed(run_config(config).to_toml(comments=False))
                 if hdus[0].header.get("GSVERS") != __version__ or stored != expected:
                     raise ValueError("it belongs to another configuration or gongsynth version")
                 planes = {name: (hdus[name].data.astype(np.float64), hdus[name].header.copy())

@@ -166,7 +166,7 @@ def _arguments(args):
 def main(argv=None):
     """Build the table and write it (refusing to overwrite unless asked)."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[1])
-    parser.add_argument("--instrument", choices=("gong", "hmi"), default="gong")
+    parser.add_argument("--instrument", choices=("gong", "hmi", "mdi"), default="gong")
     parser.add_argument("--grid", choices=sorted(GRIDS), default="paper")
     parser.add_argument("--columns", type=int, help="Sun columns per side (default: the grid's)")
     parser.add_argument("--column-size", type=float, help="column size in km (default: the grid's)")
@@ -209,7 +209,10 @@ def main(argv=None):
     out = args.out or args.systematic_only or default_out(args.instrument, args.grid)
     if out.exists() and not args.overwrite:
         parser.error(f"{out} exists: pass --overwrite to replace it")
-    args.ensemble = args.ensemble or ENSEMBLES[args.instrument]
+    args.ensemble = args.ensemble or ENSEMBLES.get(args.instrument)
+    if args.ensemble is None and not args.no_systematic:
+        parser.error(f"{args.instrument.upper()} has no Sun-model ensemble yet: pass --ensemble TABLE or "
+                     f"--no-systematic")
     changes = None if args.no_systematic else QTable.read(args.ensemble, format="ascii.ecsv")
     if changes is not None and changes.meta.get("instrument", "gong") != args.instrument:
         parser.error(f"--ensemble {args.ensemble} is a {changes.meta.get('instrument', 'gong').upper()} "
