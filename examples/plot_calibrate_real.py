@@ -85,9 +85,11 @@ print(f"unsigned flux, calibrated / measured: {flux_ratio:.3f}")
 #
 # On a disk image the viewing angle follows from each pixel's distance to
 # disk centre (this cut-out reaches θ ≈ 23°); beyond the table's last angle
-# (75°) its curve is used.  Where |B| is large the curve's slope is below the
-# weak-flux factor, so the ratio calibrated / measured is smaller than the
-# factor at zero field.
+# (75°) its curve is used.  ``calibrate`` reads the instrument from the header
+# (TELESCOP ``SDO/HMI``) and applies HMI's own table
+# (``calibration_hmi.ecsv``), whose quiet-Sun factors lie below 1: the curve
+# is the expected truth given the measurement, and HMI's 45-s photon noise
+# dilutes that regression (the calibration guide says more).
 hmi = gongsynth.load_observation(REAL / "hmi" / "JSOC_hmi.m_45s.20101020_000000_TAI.2.magnetogram.fits")
 hmi_calibrated = gongsynth.calibrate(hmi)
 theta = viewing_angle(hmi).to_value(u.deg)

@@ -182,8 +182,8 @@ def build_parser():
                           "'gong'): the map put on that instrument's scale with the predicted conversion "
                           "factors")
     cal.add_argument("--instrument", dest="source", metavar="NAME",
-                     help="with --to an instrument: the map's own instrument ('gong', 'hmi', 'mdi') when "
-                          "its header does not say")
+                     help="the map's own instrument ('gong', 'hmi', 'mdi') when its header does not say: "
+                          "with --to truth it picks that instrument's shipped table")
     cal.add_argument("--scene", choices=("angle", "distance"), default="angle",
                      help="'angle' (default): the curves at each pixel's viewing angle; 'distance': each "
                           "quiet pixel also times the shipped scene table's ratio at its distance from the "

@@ -9,6 +9,7 @@ from sunpy.coordinates import frames
 from gongsynth import GONGInstrument
 from gongsynth.analysis.apply_calibration import calibrate, viewing_angle, weak_flux_factor_map
 from gongsynth.analysis.calibration_table import (
+    INSTRUMENT_TABLES,
     calibration_table,
     read_calibration_table,
     table_curve,
@@ -184,3 +185,22 @@ def test_same_seeds_same_table():
     first, second = build(), build()
     for column in ("factor", "uncertainty", "n_pixels", "nodes", "values"):
         assert np.array_equal(np.asarray(first[column]), np.asarray(second[column]), equal_nan=True), column
+
+
+def test_calibrate_applies_the_maps_own_instruments_table():
+    measured = np.full((3, 3), 10.0)
+    centre = {}
+    for telescope, name in (("NSO-GONG", "gong"), ("SDO/HMI", "hmi"), ("", "gong")):
+        smap = _disk_map(measured.copy())
+        smap.meta["telescop"] = telescope
+        calibrated = calibrate(smap)
+        assert calibrated.meta["caltable"] == f"gongsynth/data/{INSTRUMENT_TABLES[name]}"
+        centre[telescope or "none"] = calibrated.data[1, 1]
+    # Each table's own curve: GONG's factor at 0° is above 1, HMI's below.
+    assert centre["NSO-GONG"] == centre["none"] > 10 > centre["SDO/HMI"]
+    on_mdi = calibrate(_disk_map(measured.copy()), instrument="mdi")
+    assert on_mdi.meta["caltable"] == "gongsynth/data/calibration_mdi.ecsv"
+    with pytest.raises(ValueError, match="table or instrument"):
+        calibrate(_disk_map(measured.copy()), instrument="hmi", table=read_calibration_table())
+    with pytest.raises(ValueError, match="instrument must be one of"):
+        calibrate(_disk_map(measured.copy()), instrument="spectroheliograph")

@@ -230,7 +230,8 @@ def calibrate(smap, *, table=None, force=False, to="truth", instrument=None, sce
         ``to="truth"``: the calibration table
         (`gongsynth.analysis.calibration_table`); otherwise the conversion
         table (`gongsynth.analysis.cross_calibration_table`).  Default the
-        table shipped with gongsynth.
+        table shipped with gongsynth (for ``to="truth"``: the map's
+        instrument's).
     force : bool, optional
         Calibrate even a map that is not a measurement: one calibrated
         already (its ``CALTABLE``: a second calibration multiplies the
@@ -245,9 +246,12 @@ def calibrate(smap, *, table=None, force=False, to="truth", instrument=None, sce
         pixel's θ (any ordered pair of the conversion table's instruments:
         the shipped one has GONG, HMI and MDI).
     instrument : str, optional
-        The map's instrument (``"gong"``, ``"hmi"``, ``"mdi"``) for ``to``
-        other than ``"truth"``; default read from its header
-        (`map_instrument`, which raises ValueError when the header names none).
+        The map's instrument (``"gong"``, ``"hmi"``, ``"mdi"``); default read
+        from its header (`map_instrument`).  With ``to`` another instrument it
+        picks the conversion (ValueError when the header names none); with
+        ``to="truth"`` and no ``table`` it picks the shipped table of that
+        instrument (`~gongsynth.analysis.calibration_table.INSTRUMENT_TABLES`;
+        GONG's when the header names none).
     scene : {"angle", "distance"}
         ``"angle"`` (default): the curves of the table at each pixel's θ.
         ``"distance"``: besides, each quiet pixel's value times the scene
@@ -302,9 +306,16 @@ def calibrate(smap, *, table=None, force=False, to="truth", instrument=None, sce
         raise ValueError("scene_table is used only with scene='distance'")
     if conversion:
         return _convert(smap, to, table, instrument)
-    if instrument is not None:
-        raise ValueError("instrument is used only with to= another instrument (the truth table is GONG's)")
-    if table is None or not hasattr(table, "colnames"):
+    if table is None:
+        # Each instrument has its own curves: a map read with GONG's would be wrong by ~2x for HMI or MDI.
+        table = read_calibration_table(instrument=_truth_instrument(smap, instrument))
+        if scene != "angle" and scene_table is None and table.meta.get("instrument_name", "gong") != "gong":
+            raise ValueError("scene='distance': the shipped scene table is GONG's; pass scene_table= one "
+                             "made for this instrument")
+    elif instrument is not None:
+        raise ValueError("with to='truth', instrument chooses the shipped table: pass table or instrument, "
+                         "not both")
+    elif not hasattr(table, "colnames"):
         table = read_calibration_table(table)
     measured = gauss_values(smap, "smap")
     theta = viewing_angle(smap).to_value(u.deg)
@@ -404,6 +415,16 @@ def _scale_name(name, argument, *, truth=False):
     if not isinstance(name, str) or name.lower() not in known:
         raise ValueError(f"{argument} must be one of {known}, got {name!r}")
     return name.lower()
+
+
+def _truth_instrument(smap, instrument):
+    """Whose shipped calibration table: ``instrument``, else the map's header's, else GONG's."""
+    if instrument is not None:
+        return _scale_name(instrument, "instrument")
+    try:
+        return map_instrument(smap)
+    except ValueError:
+        return "gong"       # a header that names no instrument: GONG's table, as before the family
 
 
 def _convert(smap, to, table, instrument):

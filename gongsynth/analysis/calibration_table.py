@@ -37,14 +37,17 @@ from gongsynth.files import atomic_path
 
 __all__ = ["DEFAULT_TABLE", "TABLE_LATITUDES", "UNCERTAINTY_ESTIMATOR", "SYSTEMATIC_RULE",
            "calibration_table", "seed_uncertainty", "ensemble_systematic", "add_systematic",
-           "read_calibration_table",
+           "read_calibration_table", "INSTRUMENT_TABLES",
            "write_calibration_table", "table_curve"]
 
 #: The viewing angles of the papers' tables.
 TABLE_LATITUDES = u.Quantity(sorted(PAPER_BINS), u.deg)
 
-#: File name of the table shipped with gongsynth (in ``gongsynth/data``).
+#: File name of the table shipped with gongsynth (in ``gongsynth/data``): GONG's.
 DEFAULT_TABLE = "calibration_default.ecsv"
+
+#: The shipped table of each instrument of the family (in ``gongsynth/data``; papers' grid, seeds 1-4).
+INSTRUMENT_TABLES = {"gong": DEFAULT_TABLE, "hmi": "calibration_hmi.ecsv", "mdi": "calibration_mdi.ecsv"}
 
 #: The statistical estimator (recorded in every table's metadata as ``uncertainty_estimator``).
 UNCERTAINTY_ESTIMATOR = ("uncertainty = sqrt(seed_spread**2 / n_seeds + bootstrap**2): seed_spread the "
@@ -266,13 +269,15 @@ def write_calibration_table(table, path, *, overwrite=False):
         table.write(tmp, format="ascii.ecsv", overwrite=True)  # the temporary file exists already
 
 
-def read_calibration_table(path=None):
+def read_calibration_table(path=None, *, instrument="gong"):
     """
-    Read a calibration table; by default the one shipped with gongsynth.
+    Read a calibration table; by default the one shipped with gongsynth for ``instrument``.
 
     Parameters
     ----------
     path : str or path-like, optional
+    instrument : {"gong", "hmi", "mdi"}
+        Without ``path``: whose shipped table (`INSTRUMENT_TABLES`).
 
     Returns
     -------
@@ -283,12 +288,17 @@ def read_calibration_table(path=None):
     >>> table = read_calibration_table()
     >>> sorted(str(r) for r in set(table["region"]))
     ['quiet', 'sunspot']
+    >>> read_calibration_table(instrument="hmi").meta["source"]
+    'gongsynth/data/calibration_hmi.ecsv'
     """
     if path is None:
-        resource = importlib.resources.files("gongsynth") / "data" / DEFAULT_TABLE
+        if instrument not in INSTRUMENT_TABLES:
+            raise ValueError(f"instrument must be one of {tuple(INSTRUMENT_TABLES)}, got {instrument!r}")
+        name = INSTRUMENT_TABLES[instrument]
+        resource = importlib.resources.files("gongsynth") / "data" / name
         with importlib.resources.as_file(resource) as file:
             table = QTable.read(file, format="ascii.ecsv")
-        table.meta["source"] = f"gongsynth/data/{DEFAULT_TABLE}"
+        table.meta["source"] = f"gongsynth/data/{name}"
         return table
     table = QTable.read(path, format="ascii.ecsv")
     missing = {"latitude", "region", "factor", "nodes", "values", "n_bins"} - set(table.colnames)
