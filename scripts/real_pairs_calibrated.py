@@ -10,10 +10,12 @@ maps: they are the test.
 
 Calibrations (`gongsynth.calibrate`, ``to="truth"``):
 
-- **HMI**: its predicted factor to the truth at each pixel's viewing angle,
-  from the shipped conversion table (``cross_calibration_default.ecsv``,
-  rows ``hmi -> truth`` over all field strengths): the only HMI calibration
-  gongsynth has.
+- **HMI**, two ways (column ``hmi_calibration``): ``factors``, its predicted
+  factor to the truth at each pixel's viewing angle, from the shipped
+  conversion table (``cross_calibration_default.ecsv``, rows ``hmi -> truth``
+  over all field strengths); ``curves``, the papers' curves of HMI's own
+  calibration table (``calibration_hmi.ecsv``, ``gongsynth.calibrate(hmi)``),
+  paired with GONG's curves.
 - **GONG**, two ways (column ``gong_calibration``): ``curves``, the papers'
   flux-conserving curves of the shipped calibration table
   (``calibration_default.ecsv``, ``gongsynth.calibrate(gong)``); ``factors``,
@@ -146,8 +148,10 @@ def _quiet(function, *args, **kwargs):
         return function(*args, **kwargs)
 
 
-def pair_rows(gong, hmi, rotation, calibration, conversion, weak_flux=None):
-    """The table rows of one pair: raw and calibrated statistics per band and GONG calibration, with σ."""
+def pair_rows(gong, hmi, rotation, calibration, conversion, weak_flux=None, hmi_calibration=None):
+    """The table rows of one pair: raw and calibrated statistics per band and calibration pair, with σ."""
+    if hmi_calibration is None:
+        hmi_calibration = read_calibration_table(instrument="hmi")
     a_raw, b_raw, _ = _quiet(common_grid, gong, hmi)
     ny, nx = a_raw.data.shape
     y, x = np.mgrid[:ny, :nx]
@@ -163,20 +167,24 @@ def pair_rows(gong, hmi, rotation, calibration, conversion, weak_flux=None):
             maps.append(np.asarray(_quiet(common_grid, *pair)[side].data, float))
         return np.array(maps)
 
-    hmi_terms = factor_terms(conversion, "hmi")
-    b_terms = on_grid(hmi_terms, hmi, 1)
+    hmi_by = {"factors": factor_terms(conversion, "hmi"), "curves": curve_terms(hmi_calibration)}
+    hmi_maps = {name: on_grid(terms, hmi, 1) for name, terms in hmi_by.items()}
     raw = statistics(a_raw.data, b_raw.data, np.isfinite(a_raw.data) & np.isfinite(b_raw.data), latitude)
     rows = []
-    for name, gong_terms, options in (("curves", curve_terms(calibration), {}),
-                                      ("curves_scene", curve_terms(calibration), {"scene": "distance"}),
-                                      ("factors", factor_terms(conversion, "gong"), {})):
+    for name, gong_terms, options, hmi_name in (
+            ("curves", curve_terms(calibration), {}, "factors"),
+            ("curves_scene", curve_terms(calibration), {"scene": "distance"}, "factors"),
+            ("factors", factor_terms(conversion, "gong"), {}, "factors"),
+            ("curves", curve_terms(calibration), {}, "curves")):
+        hmi_terms, b_terms = hmi_by[hmi_name], hmi_maps[hmi_name]
         a_terms = on_grid(gong_terms, gong, 0, **options)
         a, b = a_terms.sum(axis=0), b_terms.sum(axis=0)
         valid = np.isfinite(a) & np.isfinite(b)
         nominal = statistics(a, b, valid, latitude)
         _check(gongsynth.calibrate(gong, **options) if name.startswith("curves")
                else gongsynth.calibrate(gong, table=conversion, to="truth"),
-               gongsynth.calibrate(hmi, table=conversion, to="truth"), nominal, gong, hmi)
+               gongsynth.calibrate(hmi, table=hmi_calibration) if hmi_name == "curves"
+               else gongsynth.calibrate(hmi, table=conversion, to="truth"), nominal, gong, hmi)
         # Derivatives of every statistic along every row's relative error.
         steps = ([statistics(a + STEP * t, b, valid, latitude) for t in a_terms]
                  + [statistics(a, b + STEP * t, valid, latitude) for t in b_terms])
@@ -188,7 +196,8 @@ def pair_rows(gong, hmi, rotation, calibration, conversion, weak_flux=None):
             err_table = np.sqrt((grad ** 2 * sigma_table[:, None] ** 2).sum(axis=0))
             err_seeds = np.sqrt((grad ** 2 * sigma_seeds[:, None] ** 2).sum(axis=0))
             rows.append(dict(
-                rotation=rotation, gong_calibration=name, latitude_min=lo * u.deg, latitude_max=hi * u.deg,
+                rotation=rotation, gong_calibration=name, hmi_calibration=hmi_name, latitude_min=lo * u.deg,
+                latitude_max=hi * u.deg,
                 n_cells=nominal[k][0], raw_flux_ratio=raw[k][1], raw_slope=raw[k][2],
                 raw_slope_uncertainty=raw[k][3], flux_ratio=nominal[k][1],
                 flux_ratio_table=err_table[0], flux_ratio_seeds=err_seeds[0], slope=nominal[k][2],
@@ -220,7 +229,8 @@ def build_table(root=REAL, rotations=ROTATIONS):
                 "CR 2253-2255, radial field (B_LOS / mu) on CEA grids; compared on GONG's 1 deg grid",
         "ratio": "HMI / GONG, both calibrated to the truth (raw_*: as published); 1 if both calibrations are "
                  "right",
-        "hmi_calibration": "conversion table, hmi -> truth factor at each pixel's viewing angle",
+        "hmi_calibration": "factors: the conversion table's hmi -> truth factor at each pixel's viewing "
+                           "angle; curves: HMI's own calibration table's curves (calibration_hmi.ecsv)",
         "gong_calibration": "curves: the calibration table's flux-conserving curves; curves_scene: the same "
                             "with scene='distance'; factors: the conversion table's gong -> truth factor",
         "calibration_table": str(calibration.meta.get("source", "")),
@@ -239,15 +249,15 @@ def summary(table):
     rows = []
     for row in table[np.isin(table["latitude_max"].to_value(u.deg), (90, 25))]:
         band = f"{row['latitude_min'].to_value(u.deg):g}-{row['latitude_max'].to_value(u.deg):g}"
-        rows.append([f"CR {row['rotation']}", band, row["gong_calibration"],
+        rows.append([f"CR {row['rotation']}", band, row["gong_calibration"], row["hmi_calibration"],
                      f"{row['raw_flux_ratio']:.3f}",
                      f"{row['raw_slope']:.3f} ± {row['raw_slope_uncertainty']:.3f}",
                      f"{row['flux_ratio']:.3f} ± {row['flux_ratio_table']:.3f} "
                      f"({row['flux_ratio_seeds']:.3f})",
                      f"{row['slope']:.3f} ± {row['slope_uncertainty']:.3f} ± {row['slope_table']:.3f} "
                      f"({row['slope_seeds']:.3f})"])
-    return QTable(rows=rows, names=["pair", "latitudes (deg)", "GONG by", "raw flux ratio", "raw slope",
-                                    "calibrated flux ratio", "calibrated slope"])
+    return QTable(rows=rows, names=["pair", "latitudes (deg)", "GONG by", "HMI by", "raw flux ratio",
+                                    "raw slope", "calibrated flux ratio", "calibrated slope"])
 
 
 def main(argv=None):
