@@ -377,6 +377,7 @@ def test_bad_arguments(small_library):
         full_disk_scene(small_library, mueller=np.eye(4), detector_shape=8)
 
 
+@pytest.mark.validation  # ~20 s of CPU: run with `pytest -m validation`
 def test_a_full_disk_run_follows_the_synthetic_sun_of_its_date():
     """The chain: the synthetic Sun at the run's date (the default field), a GONG site; the config
     repeats the run."""

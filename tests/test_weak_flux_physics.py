@@ -18,6 +18,9 @@ import pytest
 import gongsynth
 from gongsynth.analysis.weak_flux import weak_flux_factor_difference
 
+# Three 10-minute runs of the default Sun (~1 CPU-minute): a validation, run with `pytest -m validation`.
+pytestmark = pytest.mark.validation
+
 RUN = dict(sun="model-atmosphere", detector_shape=430, resolutions=(1,), duration=10 * u.min, seed=1,
            progress=False)
 
