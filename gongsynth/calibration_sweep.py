@@ -7,8 +7,6 @@ This is run-layer work (it runs the whole chain), so it sits beside
 """
 import datetime
 import math
-import subprocess
-from pathlib import Path
 
 import astropy.units as u
 
@@ -17,9 +15,10 @@ from gongsynth.analysis.weak_flux import weak_flux_factor
 from gongsynth.config import SimulationConfig
 from gongsynth.geometry import Pointing
 from gongsynth.run_cache import cached_runs, run_config
+from gongsynth.version import git_commit
 from gongsynth.version import version as __version__
 
-__all__ = ["PRESETS", "build_calibration_table", "sweep_configs", "git_commit"]
+__all__ = ["PRESETS", "build_calibration_table", "sweep_configs"]
 
 #: Instrument changes of each preset.  "paper": the authors' code convolves
 #: with exp(-r²/2 (1.8″)²), which they call "width 3.6″" but whose FWHM is
@@ -29,20 +28,6 @@ PRESETS = {
     "default": {},
     "paper": {"seeing_fwhm": 2 * math.sqrt(2 * math.log(2)) * 1.8 * u.arcsec},
 }
-
-
-def git_commit():
-    """
-    The commit of the gongsynth checkout (``git describe --always --dirty``), or "" outside one.
-
-    An editable install's version string does not follow later commits, so the tables record this too.
-    """
-    try:
-        done = subprocess.run(["git", "describe", "--always", "--dirty"], cwd=Path(__file__).resolve().parent,
-                              capture_output=True, text=True, timeout=30)
-    except (OSError, subprocess.SubprocessError):
-        return ""
-    return done.stdout.strip() if done.returncode == 0 else ""
 
 
 def _seed_factor(run, region):

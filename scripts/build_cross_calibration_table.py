@@ -26,7 +26,6 @@ with the same bits.  Same gongsynth version, same seeds: the same
 numbers, bit for bit (only the ``created`` date in the metadata differs).
 """
 import argparse
-import subprocess
 from pathlib import Path
 
 import astropy.units as u
@@ -35,6 +34,7 @@ import numpy as np
 from gongsynth.analysis.calibration_table import TABLE_LATITUDES, write_calibration_table
 from gongsynth.analysis.cross_calibration_table import DEFAULT_CROSS_TABLE
 from gongsynth.cross_calibration_sweep import cross_calibration_table
+from gongsynth.version import git_commit
 
 SEEDS = (1, 2)
 INSTRUMENTS = ("gong", "hmi", "mdi")
@@ -52,9 +52,7 @@ def main(argv=None):
     table = cross_calibration_table(INSTRUMENTS, TABLE_LATITUDES, seeds=SEEDS, cache=args.cache,
                                     progress=True)
     # An editable install's version string does not follow later commits: record the commit too.
-    here = Path(__file__).resolve().parent
-    commit = subprocess.run(["git", "describe", "--always", "--dirty"], cwd=here, capture_output=True,
-                            text=True).stdout.strip()
+    commit = git_commit()
     if commit:
         table.meta["git_commit"] = commit
     write_calibration_table(table, args.out, overwrite=args.overwrite)

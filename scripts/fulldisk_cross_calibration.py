@@ -34,7 +34,6 @@ Usage (several minutes on 2 cores; ``--cache DIR`` keeps the three runs' maps)::
 """
 import argparse
 import datetime
-import subprocess
 import warnings
 from pathlib import Path
 
@@ -50,6 +49,7 @@ import gongsynth
 from gongsynth import instruments as family
 from gongsynth.analysis.apply_calibration import viewing_angle
 from gongsynth.analysis.degrade import degrade_to_gong
+from gongsynth.version import git_commit
 
 #: The date (solar maximum: active regions on the disk) and seed of the three runs.
 DATE = "2014-04-01T18:00"
@@ -144,8 +144,7 @@ def build_table(date=DATE, seed=SEED, progress=False, cache=None, sun=None):
         tables.append(table)
     out = vstack(tables, metadata_conflicts="silent")
     out.meta.update({k: v for k, v in meta.items() if k not in ("map_a", "map_b", "mask_valid")})
-    commit = subprocess.run(["git", "describe", "--always", "--dirty"], cwd=Path(__file__).resolve().parent,
-                            capture_output=True, text=True).stdout.strip()
+    commit = git_commit()
     out.meta.update({
         "runs": {name: f"gongsynth.simulate(instrument={name!r}, mode='full-disk', seed={seed}, "
                        f"obstime={date!r}, detector_shape={side}"

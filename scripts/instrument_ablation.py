@@ -61,7 +61,6 @@ configurations)::
 import argparse
 import dataclasses
 import datetime
-import subprocess
 from pathlib import Path
 
 import astropy.units as u
@@ -73,7 +72,7 @@ from gongsynth.analysis.cross_calibration_table import conversion_factors
 from gongsynth.config import Effects
 from gongsynth.instruments.hmi import HMIInstrument
 from gongsynth.sun.rt.atomic_data import get_line
-from gongsynth.version import version
+from gongsynth.version import git_commit, version
 
 #: The viewing latitudes and seeds of the ablation (the table's disk centre, where the real pairs'
 #: low-latitude cells are seen, and its first seed; ``--latitudes`` and ``--seeds`` add others).
@@ -159,8 +158,7 @@ def ablation_table(latitudes=LATITUDES, seeds=SEEDS, *, cache=None, progress=Tru
                          factors[("hmi", "truth")][1][k], np.log(reference / to_hmi[k]) / np.log(reference)))
     out = QTable(rows=rows, names=("variant", "switched_off", "latitude", "gong_to_hmi", "uncertainty",
                                    "gong_to_truth", "hmi_to_truth", "share"))
-    commit = subprocess.run(["git", "describe", "--always", "--dirty"], cwd=Path(__file__).resolve().parent,
-                            capture_output=True, text=True).stdout.strip()
+    commit = git_commit()
     out.meta.update({
         "gongsynth_version": version, "git_commit": commit, "seeds": list(seeds),
         "method": "scripts/instrument_ablation.py: the conversion table's GONG and HMI runs "

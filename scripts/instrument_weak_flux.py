@@ -23,7 +23,6 @@ writes the table again from the records alone (without the pooled fits).
 import argparse
 import datetime
 import json
-import subprocess
 import time
 from pathlib import Path
 
@@ -32,6 +31,7 @@ import numpy as np
 from astropy.table import QTable, vstack
 
 import gongsynth
+from gongsynth.version import git_commit
 
 
 def measure(instrument, latitude, seeds, record, duration=None):
@@ -103,8 +103,7 @@ def write_table(rows, out, append=False):
         "seeds": sorted({int(s) for r in rows for s in r["seeds"]} | set(table.meta.get("seeds", []))),
         "script": "scripts/instrument_weak_flux.py",
         "commits": list(table.meta.get("commits", [])) + [
-            subprocess.run(["git", "describe", "--always", "--dirty"], capture_output=True, text=True,
-                           cwd=Path(__file__).parent).stdout.strip()],
+            git_commit()],
         "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
     })
     table.write(out, format="ascii.ecsv", overwrite=True)

@@ -10,9 +10,9 @@ Two parts, each optional:
     observed value and accepted range beside each measured value.
 
 ``--weak-flux OUT.ecsv``
-    For each variant, the default run of ``--instrument`` (GONG or HMI;
-    `gongsynth.simulate`: 256² columns of 384 km, the instrument's detector,
-    10 minutes) with the variant's ``[photosphere]``
+    For each variant, the default run of ``--instrument`` (GONG, HMI or MDI;
+    `gongsynth.simulate`: 256² columns of 384 km, the instrument's detector
+    and default duration) with the variant's ``[photosphere]``
     knobs at each latitude and seed, through `gongsynth.run_cache.cached_runs`
     (resumable with ``--cache``); the papers' quiet-Sun factor
     (`gongsynth.weak_flux_factor`) pooled over the seeds with its block
@@ -199,7 +199,7 @@ def main(argv=None):
     parser.add_argument("--seed", type=int, default=1, help="seed of the constraint boxes")
     parser.add_argument("--latitudes", type=float, nargs="+", default=[0.0, 60.0])
     parser.add_argument("--seeds", type=int, nargs="+", default=[1, 2], help="seeds of the runs")
-    parser.add_argument("--instrument", choices=("gong", "hmi"), default="gong",
+    parser.add_argument("--instrument", choices=("gong", "hmi", "mdi"), default="gong",
                         help="instrument of the weak-flux runs (its default run otherwise)")
     parser.add_argument("--n-boot", type=int, default=50)
     parser.add_argument("--workers", type=int)

@@ -21,7 +21,6 @@ A run of the default grid (256² columns of 384 km) takes 30-60 s on 2 cores;
 import argparse
 import datetime
 import json
-import subprocess
 import time
 from pathlib import Path
 
@@ -35,6 +34,7 @@ from gongsynth.config import Effects, SimulationConfig
 from gongsynth.geometry import Pointing
 from gongsynth.seeding import child_sequence
 from gongsynth.suns import SUNS
+from gongsynth.version import git_commit
 
 #: What each ablation of the 3-D Sun switches off: [photosphere] knobs, instrument effects, or the rays.
 ABLATIONS = {
@@ -123,9 +123,7 @@ def summarise(paths, out):
                        "change = paired change from the baseline run of the same seeds (ablations).",
         "script": "scripts/weak_flux_factors.py",
         "run_versions": sorted({r.get("version", "?") for r in records}),
-        "summarised_at_commit": subprocess.run(["git", "describe", "--always", "--dirty"],
-                                               capture_output=True, text=True,
-                                               cwd=Path(__file__).parent).stdout.strip(),
+        "summarised_at_commit": git_commit(),
         "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
     })
     table.write(out, format="ascii.ecsv", overwrite=True)
