@@ -57,6 +57,18 @@ tabulated angle), which the issue says is 10-20 times the bootstrap's.  The
 statistical error of the real maps themselves is the bisector's
 ``slope_uncertainty`` (Isobe et al. 1990; it assumes independent cells).
 
+The tables' ``systematic`` columns (the Sun-model ensemble, issue 24) are
+propagated member by member where both maps are calibrated by their own
+tables' curves (columns ``*_sys``): an accepted member m of both tables'
+ensembles (``ensemble_members`` in their metadata) moves every quiet-Sun row j
+of both tables at once, by its paired change over the row's factor,
+δ_mj = change_mj / factor_j (``docs/guide/sun_ensemble_weak_flux*.ecsv``; the
+sunspot rows are not moved: not measured), so the statistic moves by
+Δ_m = Σ_j (∂statistic / ∂ε_j) δ_mj, and ``*_sys`` = max_m |Δ_m|.  A member
+moves GONG's and HMI's factors the same way (a smaller spot lowers both), so
+much of it cancels in the ratio: taking the two tables' bands as independent
+would overstate it.
+
 About 1 minute::
 
     python scripts/real_pairs_calibrated.py --out docs/guide/real_pairs_calibrated.ecsv \
@@ -86,6 +98,10 @@ BANDS = ((0, 90), (0, 25), (25, 45), (45, 60))
 
 #: The finite step of the relative error of one table row.
 STEP = 1e-4
+
+#: The Sun-model ensembles behind the tables' systematic columns (scripts/sun_ensemble.py).
+GUIDE = Path(__file__).resolve().parents[1] / "docs" / "guide"
+ENSEMBLES = {"gong": GUIDE / "sun_ensemble_weak_flux.ecsv", "hmi": GUIDE / "sun_ensemble_weak_flux_hmi.ecsv"}
 
 
 def curve_terms(table):
@@ -132,6 +148,30 @@ def seed_sigmas(terms, weak_flux=None):
     return np.array(sigmas)
 
 
+def member_shifts(table, ensemble):
+    """
+    Per accepted ensemble member of ``table``: each row's relative factor change (curve_terms' order).
+
+    Quiet rows move by the member's paired change at the row's latitude over the row's factor;
+    sunspot rows by 0 (the ensemble measures the quiet-Sun factor only).
+    """
+    latitudes = ensemble["latitude"].to_value(u.deg)
+    shifts = {}
+    for member in table.meta.get("ensemble_members", []):
+        relative = []
+        for row in table:
+            angle = row["latitude"].to_value(u.deg)
+            hit = ensemble[(np.asarray(ensemble["variant"]) == member) & np.isclose(latitudes, angle)]
+            if row["region"] != "quiet":
+                relative.append(0.0)
+            elif len(hit) == 1:
+                relative.append(float(hit["change"][0] / row["factor"]))
+            else:
+                raise ValueError(f"ensemble member {member!r} has no single row at {angle:g} deg")
+        shifts[member] = np.array(relative)
+    return shifts
+
+
 def statistics(a, b, valid, latitude):
     """Per |latitude| band: (cells, Σ|b|/Σ|a|, bisector slope, its σ) over valid cells (CEA: equal areas)."""
     out = []
@@ -167,6 +207,9 @@ def pair_rows(gong, hmi, rotation, calibration, conversion, weak_flux=None, hmi_
             maps.append(np.asarray(_quiet(common_grid, *pair)[side].data, float))
         return np.array(maps)
 
+    gong_shifts = member_shifts(calibration, QTable.read(ENSEMBLES["gong"], format="ascii.ecsv"))
+    hmi_shifts = member_shifts(hmi_calibration, QTable.read(ENSEMBLES["hmi"], format="ascii.ecsv"))
+    members = [m for m in gong_shifts if m in hmi_shifts]
     hmi_by = {"factors": factor_terms(conversion, "hmi"), "curves": curve_terms(hmi_calibration)}
     hmi_maps = {name: on_grid(terms, hmi, 1) for name, terms in hmi_by.items()}
     raw = statistics(a_raw.data, b_raw.data, np.isfinite(a_raw.data) & np.isfinite(b_raw.data), latitude)
@@ -195,13 +238,18 @@ def pair_rows(gong, hmi, rotation, calibration, conversion, weak_flux=None, hmi_
                              for s in steps])
             err_table = np.sqrt((grad ** 2 * sigma_table[:, None] ** 2).sum(axis=0))
             err_seeds = np.sqrt((grad ** 2 * sigma_seeds[:, None] ** 2).sum(axis=0))
+            err_sys = np.full(2, np.nan)
+            if name == "curves" and hmi_name == "curves" and members:
+                moved = [grad.T @ np.concatenate([gong_shifts[m], hmi_shifts[m]]) for m in members]
+                err_sys = np.max(np.abs(moved), axis=0)
             rows.append(dict(
                 rotation=rotation, gong_calibration=name, hmi_calibration=hmi_name, latitude_min=lo * u.deg,
                 latitude_max=hi * u.deg,
                 n_cells=nominal[k][0], raw_flux_ratio=raw[k][1], raw_slope=raw[k][2],
                 raw_slope_uncertainty=raw[k][3], flux_ratio=nominal[k][1],
-                flux_ratio_table=err_table[0], flux_ratio_seeds=err_seeds[0], slope=nominal[k][2],
-                slope_uncertainty=nominal[k][3], slope_table=err_table[1], slope_seeds=err_seeds[1]))
+                flux_ratio_table=err_table[0], flux_ratio_seeds=err_seeds[0], flux_ratio_sys=err_sys[0],
+                slope=nominal[k][2], slope_uncertainty=nominal[k][3], slope_table=err_table[1],
+                slope_seeds=err_seeds[1], slope_sys=err_sys[1]))
     return rows
 
 
@@ -238,10 +286,16 @@ def build_table(root=REAL, rotations=ROTATIONS):
         "uncertainty": "*_table: the tables' uncertainty columns propagated linearly (rows independent); "
                        "*_seeds: the same with the quiet curves' sigma raised to the run grid's seed scatter "
                        "(weak_flux_factors.ecsv); slope_uncertainty: the real maps' (bisector, Isobe et al. "
-                       "1990)",
+                       "1990); *_sys: the Sun-model ensemble, member by member over both tables at once "
+                       "(max |change| over the members accepted by both; own curves on both sides only)",
         "gongsynth_version": gongsynth.__version__,
     })
     return table
+
+
+def _sys(value):
+    """`` ± σ (sys)`` where the ensemble's band was propagated, else nothing."""
+    return f" ± {value:.3f} (sys)" if np.isfinite(value) else ""
 
 
 def summary(table):
@@ -253,9 +307,9 @@ def summary(table):
                      f"{row['raw_flux_ratio']:.3f}",
                      f"{row['raw_slope']:.3f} ± {row['raw_slope_uncertainty']:.3f}",
                      f"{row['flux_ratio']:.3f} ± {row['flux_ratio_table']:.3f} "
-                     f"({row['flux_ratio_seeds']:.3f})",
+                     f"({row['flux_ratio_seeds']:.3f}){_sys(row['flux_ratio_sys'])}",
                      f"{row['slope']:.3f} ± {row['slope_uncertainty']:.3f} ± {row['slope_table']:.3f} "
-                     f"({row['slope_seeds']:.3f})"])
+                     f"({row['slope_seeds']:.3f}){_sys(row['slope_sys'])}"])
     return QTable(rows=rows, names=["pair", "latitudes (deg)", "GONG by", "HMI by", "raw flux ratio",
                                     "raw slope", "calibrated flux ratio", "calibrated slope"])
 
