@@ -103,7 +103,8 @@ MEMBERS = ("plage-elements", "large-umbra", "small-spot")
 
 #: Each instrument's ensemble table (``scripts/sun_ensemble.py --weak-flux``).
 ENSEMBLES = {"gong": ROOT / "docs" / "guide" / "sun_ensemble_weak_flux.ecsv",
-             "hmi": ROOT / "docs" / "guide" / "sun_ensemble_weak_flux_hmi.ecsv"}
+             "hmi": ROOT / "docs" / "guide" / "sun_ensemble_weak_flux_hmi.ecsv",
+             "mdi": ROOT / "docs" / "guide" / "sun_ensemble_weak_flux_mdi.ecsv"}
 
 #: Paper III's statement on the quiet-Sun factor (more than 2 at disk centre, about 1 near the limb).
 PAPER_III = {0.0: "> 2", 75.0: "≈ 1"}

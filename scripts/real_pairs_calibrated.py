@@ -91,6 +91,7 @@ from gongsynth.analysis.cross_calibration import bisector_slope, common_grid
 from gongsynth.analysis.cross_calibration_table import read_cross_calibration_table
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from build_default_calibration_table import ENSEMBLES  # noqa: E402
 from real_pairs_cross_calibration import REAL, ROTATIONS, load_pair  # noqa: E402
 
 #: |latitude| groups (deg) of the comparison.
@@ -98,10 +99,6 @@ BANDS = ((0, 90), (0, 25), (25, 45), (45, 60))
 
 #: The finite step of the relative error of one table row.
 STEP = 1e-4
-
-#: The Sun-model ensembles behind the tables' systematic columns (scripts/sun_ensemble.py).
-GUIDE = Path(__file__).resolve().parents[1] / "docs" / "guide"
-ENSEMBLES = {"gong": GUIDE / "sun_ensemble_weak_flux.ecsv", "hmi": GUIDE / "sun_ensemble_weak_flux_hmi.ecsv"}
 
 
 def curve_terms(table):
