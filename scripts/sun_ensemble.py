@@ -25,15 +25,16 @@ The numbers of ``docs/guide/sun_ensemble.rst`` came from::
 
     python scripts/sun_ensemble.py --rst --constraints docs/guide/sun_ensemble_constraints.ecsv
     python scripts/sun_ensemble.py --rst --weak-flux docs/guide/sun_ensemble_weak_flux.ecsv --cache runs \
-        --latitudes 0 25 45 60 70 75 --variants default small-spot large-umbra
+        --latitudes 0 25 45 60 70 75 --variants default small-spot large-umbra plage-elements
     python scripts/sun_ensemble.py --rst --weak-flux docs/guide/sun_ensemble_weak_flux_hmi.ecsv --cache runs \
-        --instrument hmi --seeds 1 --latitudes 0 25 45 60 70 75 \
+        --instrument hmi --seeds 1 2 --latitudes 0 25 45 60 70 75 \
+        --variants default small-spot large-umbra plage-elements
+    python scripts/sun_ensemble.py --rst --weak-flux docs/guide/sun_ensemble_weak_flux_mdi.ecsv --cache runs \
+        --instrument mdi --seeds 1 --latitudes 0 25 45 60 70 75 \
         --variants default small-spot large-umbra plage-elements
 
-(``--rst`` also writes the tables the guide page includes.  The GONG six-angle ensemble has only the
-two spot variants, which set the band: plage-elements and maltby-e-umbra, run at 0 and 60 deg
-before, changed the factor by under 0.01; the CPU ran out before their six-angle runs.)  The
-constraints take ~30 s of CPU per variant; a GONG run ~18 s of CPU, an HMI run ~25 s, one per
+(``--rst`` also writes the tables the guide page includes.)  The
+constraints take ~30 s of CPU per variant; a GONG run ~18 s of CPU, an HMI run ~25 s, an MDI run ~21 s, one per
 variant, latitude and seed.
 """
 import argparse
