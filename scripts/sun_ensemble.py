@@ -34,8 +34,8 @@ The numbers of ``docs/guide/sun_ensemble.rst`` came from::
         --variants default small-spot large-umbra plage-elements
 
 (``--rst`` also writes the tables the guide page includes.)  The
-constraints take ~30 s of CPU per variant; a GONG run ~18 s of CPU, an HMI run ~25 s, an MDI run ~21 s, one per
-variant, latitude and seed.
+constraints take ~30 s of CPU per variant; a GONG run ~18 s of CPU, an HMI run ~25 s, an MDI run
+~21 s, one per variant, latitude and seed.
 """
 import argparse
 import datetime
