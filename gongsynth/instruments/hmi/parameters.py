@@ -166,8 +166,9 @@ class HMIInstrument(InstrumentParameters):
     tiled_detector_shape: ClassVar[int] = 1024
     #: The full-disk render's Doppler basis may be reduced while every filtergram stays within this
     #: fraction of its continuum's (`gongsynth.stages.scene.disk_render.render_rows`).  From the photon
-    #: noise: a continuum filtergram holds N_e ≈ 1.31e5 electrons (`gongsynth.instruments.hmi.noise.
-    #: continuum_electrons`), σ = N_e^-1/2 = 2.77e-3 of it; B and v are linear in the 12 filtergrams near
+    #: noise: a continuum filtergram holds N_e ≈ 1.31e5 electrons
+    #: (`gongsynth.instruments.hmi.noise.continuum_electrons`), σ = N_e^-1/2 = 2.77e-3 of it; B and v
+    #: are linear in the 12 filtergrams near
     #: the signal, so an error ≤ ε in each moves them by at most √12 ε/σ of their photon noise
     #: (Cauchy-Schwarz): 8e-5 bounds that at 10 % (the actual errors are far smaller).
     render_tolerance: ClassVar[float] = 8e-5
