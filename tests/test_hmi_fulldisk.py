@@ -119,3 +119,39 @@ def test_light_made_by_bands_images_as_the_whole_light(hmi_library, monkeypatch)
     assert np.abs(banded[0].value - whole[0].value).max() < 2e-6 * scale
     assert np.array_equal(banded[1], whole[1])                  # pixel means: the same bits
     assert np.allclose(banded[2].value, whole[2].value, rtol=0, atol=2e-6 * np.abs(whole[2].value).max())
+
+
+def test_reduced_basis_keeps_every_filtergram_within_its_bound(hmi_library):
+    """The render's lower-rank Doppler basis (issue 26, hmi26): each stored row's 12 filtergrams at every
+    tabulated velocity within the returned bound (≤ the tolerance) of the full basis' (float32 rows:
+    + 1e-6); the truth is untouched, and the scene says which rank it used."""
+    tolerance, lib = 1e-3, hmi_library
+    patches, uniform, amplitudes, bound = disk_render.render_rows(lib, tolerance)
+    rank, j1, basis = amplitudes.shape[-1], lib.rank + 1, lib.basis
+    assert rank < lib.rank and 0 < bound <= tolerance and patches.shape[-1] == 2 * (rank + 1) + 2
+    old, new = lib.patches.reshape(-1, lib.row_size).astype(float), patches.reshape(-1, 2 * rank + 4)
+
+    totals = basis.totals[::40]
+
+    def channels(rows, width, amp):
+        e, v = rows[:, :width], rows[:, width:2 * width]
+        return np.stack([(s[:, :1, None] * totals[None] + np.einsum("vck,nk->nvc", amp, s[:, 1:]))
+                         for s in (e + v, e - v)])
+
+    full = channels(old, j1, basis.amplitudes[::40])
+    reduced = channels(new.astype(float), rank + 1, amplitudes[::40])
+    continuum = np.stack([c[:, None, None] * totals[None]
+                          for c in (old[:, 0] + old[:, j1], old[:, 0] - old[:, j1])])
+    assert np.abs(reduced - full).max() > 0         # a real change ...
+    assert np.all(np.abs(reduced - full) <= (bound + 1e-6) * continuum)   # ... within its bound
+    np.testing.assert_array_equal(new[:, -2:], old[:, -2:])          # B_z, B_x kept
+    args = dict(instrument=HMI.replace(plate_scale=40 * u.arcsec), detector_shape=48, supersampling=1, seed=3)
+    light, truth = library_scene(lib, basis_tolerance=tolerance, **args)
+    light_full, truth_full = library_scene(lib, basis_tolerance=None, **args)
+    assert light.meta["render_rank"] == rank and light_full.meta["render_rank"] == lib.rank
+    np.testing.assert_array_equal(truth.data, truth_full.data)
+    on = light_full.data.value > 0
+    rel = np.abs(light.data.value - light_full.data.value)[on] / light_full.data.value[on]
+    assert 0 < rel.max() < 2 * (bound + 1e-6)      # a line filtergram is ≥ half its continuum's here
+    with pytest.raises(ValueError, match="basis_tolerance"):
+        library_scene(lib, basis_tolerance="fast", **args)

@@ -164,6 +164,14 @@ class HMIInstrument(InstrumentParameters):
     #: CCD would only repeat the box 16 times more at 16 times the optics, camera and
     #: reduction cost (139 s and 9.5 GB for a 10-min run).
     tiled_detector_shape: ClassVar[int] = 1024
+    #: The full-disk render's Doppler basis may be reduced while every filtergram stays within this
+    #: fraction of its continuum's (`gongsynth.stages.scene.disk_render.render_rows`).  From the photon
+    #: noise: a continuum filtergram holds N_e ≈ 1.31e5 electrons
+    #: (`gongsynth.instruments.hmi.noise.continuum_electrons`), σ = N_e^-1/2 = 2.77e-3 of it; B and v
+    #: are linear in the 12 filtergrams near
+    #: the signal, so an error ≤ ε in each moves them by at most √12 ε/σ of their photon noise
+    #: (Cauchy-Schwarz): 8e-5 bounds that at 10 % (the actual errors are far smaller).
+    render_tolerance: ClassVar[float] = 8e-5
     #: The PSF: Wachter et al. (2012)'s measured core and scattered-light wings
     #: (`gongsynth.instruments.hmi.psf`).
     psf_model: ClassVar[str] = "gongsynth.instruments.hmi.psf:psf_profile"

@@ -283,19 +283,18 @@ def _render_rows(start, stop, light, truth, h, x0, y0, distance, b0, radius,
                     w = -w0 if mirror else w0
                     ix = min(np.int64(((u0 + ox) % size_x) / pixel_km), nx - 1)
                     iy = min(np.int64(((w + oy) % size_y) / pixel_km), ny - 1)
-                for tt in range(2):
-                    wgt = weight * (1.0 - wt if tt == 0 else wt)
-                    if wgt == 0.0:
-                        continue
-                    if uni < 0:
-                        src = patches[p, iy, ix, t0 + tt]
-                    else:
-                        src = uniform[uni, t0 + tt]
-                    for k in range(first, v_off):
-                        acc[k] += wgt * src[k]
-                    ws = wgt * s
-                    for k in range(max(v_off, first), k_row):
-                        acc[k] += ws * src[k]
+                # Both angles' rows side by side (adjacent in memory): one pass over the row.
+                if uni < 0:
+                    src = patches[p, iy, ix]
+                else:
+                    src = uniform[uni]
+                wa, wb = weight * (1.0 - wt), weight * wt
+                row_a, row_b = src[t0], src[t0 + 1]
+                for k in range(first, v_off):
+                    acc[k] += wa * row_a[k] + wb * row_b[k]
+                wa, wb = wa * s, wb * s
+                for k in range(max(v_off, first), k_row):
+                    acc[k] += wa * row_a[k] + wb * row_b[k]
             # -- limb darkening at the sample's own μ, then the Doppler basis at its velocity
             ld = 0.0
             for k in range(ld_coeff.size - 1, -1, -1):

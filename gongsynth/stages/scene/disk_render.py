@@ -21,11 +21,12 @@ from gongsynth.seeding import as_seed_sequence
 from gongsynth.stages.channels import CHANNEL_UNIT
 from gongsynth.stages.scene.disk_kernel import cell_table, render_disk
 from gongsynth.stages.scene.scene import DeferredStack, Scene, radiance_at_earth, sky_grid
+from gongsynth.stages.scene.shifts import reduced_basis
 from gongsynth.stages.scene.surface import large_scale_grid
 from gongsynth.sun.rotation import CONVECTIVE_BLUESHIFT_FE6302
 from gongsynth.validation import check_quantity
 
-__all__ = ["library_scene", "VELOCITY_TERMS", "LIGHT_BYTES"]
+__all__ = ["library_scene", "render_rows", "VELOCITY_TERMS", "LIGHT_BYTES"]
 
 #: The large-scale velocity terms `library_scene` can switch.
 VELOCITY_TERMS = ("rotation", "observer", "blueshift")
@@ -102,9 +103,81 @@ def _drop_pages(array):
         mapped.madvise(mmap.MADV_DONTNEED)
 
 
+#: Library rows transformed at a time (bounds the memory of a large, memory-mapped library).
+_ROWS_PER_CHUNK = 2**18
+
+
+def _row_chunks(library):
+    """The library's stored rows, (n, K) views a chunk at a time (patches, then the uniform levels)."""
+    for array in (library.patches, library.uniform):
+        flat = np.asarray(array).reshape(-1, array.shape[-1])
+        for start in range(0, flat.shape[0], _ROWS_PER_CHUNK):
+            yield flat[start:start + _ROWS_PER_CHUNK]
+
+
+def render_rows(library, tolerance=None):
+    """
+    The library's rows and Doppler amplitudes as the renderer reads them: as stored, or on a lower rank.
+
+    With a ``tolerance``, the basis is reduced (`gongsynth.stages.scene.shifts.reduced_basis`) for the
+    spectra the library holds, both analyser states (every stored E part plus and minus V), so that
+    every filtergram of every stored row, at every tabulated velocity, stays within ``tolerance`` of
+    the filtergram of its continuum; a sample mixes rows with positive weights and scales them alike
+    (limb darkening), so its error obeys the same bound.  Each E and V part of a row is replaced by
+    its continuum and its r new coordinates; B_z and B_x are kept.
+
+    Parameters
+    ----------
+    library : `~gongsynth.stages.scene.library.PatchLibrary`
+    tolerance : float, optional
+        Largest relative error of a filtergram; None keeps the stored basis (the same bits).
+
+    Returns
+    -------
+    patches, uniform : `numpy.ndarray`
+        float32, the library's shapes with rows of K' = (n_e + 1)(r + 1) + 2 floats.
+    amplitudes : `numpy.ndarray`
+        (nv, C, r) float64.
+    bound : float
+        The bound on the filtergrams' relative error (0 for the stored basis).
+    """
+    basis = library.basis
+    if tolerance is None:
+        return np.asarray(library.patches), np.asarray(library.uniform), basis.amplitudes, 0.0
+    j1 = basis.rank + 1
+    lay = library.layout()
+    parts = lay["e"] + [lay["v"]]
+
+    def spectra():
+        for rows in _row_chunks(library):
+            v = rows[:, lay["v"]:lay["v"] + j1].astype(np.float64)
+            for e in lay["e"]:
+                yield from (rows[:, e:e + j1] + v, rows[:, e:e + j1] - v)
+
+    transform, amplitudes, bound = reduced_basis(basis, spectra, tolerance)
+    if transform is None:
+        return np.asarray(library.patches), np.asarray(library.uniform), basis.amplitudes, 0.0
+    r1 = transform.shape[0] + 1
+    # The stored E and V parts (continuum, J coordinates) to (continuum, r coordinates).
+    block = np.zeros((j1, r1))
+    block[0, 0] = 1.0
+    block[1:, 1:] = transform.T
+    out = []
+    for array in (library.patches, library.uniform):
+        flat = np.asarray(array).reshape(-1, array.shape[-1])
+        rows = np.empty((flat.shape[0], len(parts) * r1 + 2), dtype=np.float32)
+        for start in range(0, flat.shape[0], _ROWS_PER_CHUNK):
+            chunk = flat[start:start + _ROWS_PER_CHUNK].astype(np.float64)
+            for i, offset in enumerate(parts):
+                rows[start:start + chunk.shape[0], i * r1:(i + 1) * r1] = chunk[:, offset:offset + j1] @ block
+            rows[start:start + chunk.shape[0], -2:] = chunk[:, lay["bz"]:lay["bx"] + 1]
+        out.append(rows.reshape(array.shape[:-1] + (rows.shape[1],)))
+    return out[0], out[1], amplitudes, bound
+
+
 def library_scene(library, *, obstime=None, instrument=None, detector_shape=None, supersampling=None,
                   surface_field=None, seed=0, site=None, velocities=True, cell_size=30 * u.Mm,
-                  pointing=None, network=None):
+                  pointing=None, network=None, basis_tolerance="instrument"):
     """
     The light and true B·n of the whole disk from a patch library.
 
@@ -136,6 +209,10 @@ def library_scene(library, *, obstime=None, instrument=None, detector_shape=None
         Helioprojective (Tx, Ty) of the detector's centre (default the Sun's centre).
     network : `~gongsynth.sun.surface_field.network.SupergranularNetwork`, optional
         The magnetic network laid on the large-scale field (`large_scale_grid`).
+    basis_tolerance : float or None or "instrument", optional
+        Render on a Doppler basis of lower rank whose filtergrams stay within this fraction of their
+        continuum's (`render_rows`); None: the library's own basis; "instrument" (default): the
+        instrument's ``render_tolerance`` if it has one (HMI), else None.
 
     Returns
     -------
@@ -189,6 +266,12 @@ def library_scene(library, *, obstime=None, instrument=None, detector_shape=None
     distance, b0 = get_earth(time).radius.to_value(u.km), sun.B0(time).to_value(u.rad)
     r_sun = radius.to_value(u.km)
     cells, (cell_j0, cell_i0) = cell_table(r_sun, cell_km, distance, b0)
+    if isinstance(basis_tolerance, str):
+        if basis_tolerance != "instrument":
+            raise ValueError("basis_tolerance must be a float, None or 'instrument', "
+                             f"got {basis_tolerance!r}")
+        basis_tolerance = getattr(inst, "render_tolerance", None)
+    patches, uniform, amplitudes, bound = render_rows(library, basis_tolerance)
 
     def render(light, plane0, row0=0):
         return render_disk(
@@ -198,11 +281,10 @@ def library_scene(library, *, obstime=None, instrument=None, detector_shape=None
             cell_km, cells, cell_j0, cell_i0, _scene_seed(seed), np.radians(library.theta),
             np.asarray(library.line.limb_darkening, float),
             library.level_net.astype(np.float64), level_first, level_count,
-            np.asarray(library.level_uniform, dtype=np.int64), np.asarray(library.patches),
-            np.asarray(library.uniform),
+            np.asarray(library.level_uniform, dtype=np.int64), patches, uniform,
             library.pixel_size.to_value(u.km), bool(library.mirror_ok), int(library.n_e),
             np.asarray(library.e_index, dtype=np.int64), np.asarray(library.v_sign, dtype=np.float64),
-            basis.amplitudes, basis.totals, float(basis.velocity[0]),
+            amplitudes, basis.totals, float(basis.velocity[0]),
             float(basis.velocity[1] - basis.velocity[0]),
             # The basis integrates over wavelength in nm; the channel unit is per cm of spectrum × cm.
             float(to_earth.value * (1 * u.nm).to_value(u.cm)), plane0, row0)
@@ -221,6 +303,7 @@ def library_scene(library, *, obstime=None, instrument=None, detector_shape=None
     header = wcs_header(grid, scale, centre, wavelength=inst.line_wavelength)
     meta = dict(mode="full-disk", obstime=time, supersampling=int(supersampling), source="library",
                 photosphere_pixel_size=library.pixel_size, cell_size=cell_km * u.km, velocities=terms,
+                render_rank=amplitudes.shape[-1], render_error_bound=bound,
                 on_disk_samples=int(on_disk), large_scale=large, library=repr(library))
     common = dict(boundary="zero", instrument=inst, detector_shape=det, centre=centre)
     truth = Scene(u.Quantity(blos, u.G, copy=False), scale, header, meta={**meta, "quantity": "blos"},

@@ -38,7 +38,7 @@ from gongsynth import instruments
 from gongsynth.instruments.quadrature import filter_quadrature, hat_weights
 from gongsynth.validation import check_quantity, check_wavelength_grid
 
-__all__ = ["ShiftBasis", "shifted_channel_weights", "shift_basis"]
+__all__ = ["ShiftBasis", "shifted_channel_weights", "shift_basis", "reduced_basis"]
 
 _C_KMS = const.c.to_value(u.km / u.s)
 _NODE_KMS = 0.2   # spacing of the exact weights (km/s); a cubic spline between errs by ~1e-6
@@ -255,3 +255,83 @@ def shift_basis(wavelength, instrument=None, *, max_velocity=4 * u.km / u.s, tol
     totals = CubicSpline(nodes, totals, axis=0)(velocity)
     return ShiftBasis(wavelength=lam, vectors=vectors, velocity=velocity * 1e3,
                       amplitudes=amplitudes, totals=totals, error=error)
+
+
+def reduced_basis(basis, spectra, tolerance):
+    r"""
+    A basis of lower rank that reproduces the channels of a given set of spectra within a tolerance.
+
+    The rows of the (velocity, channel) × J matrix of amplitudes are
+    reduced for the spectra actually present, not for every spectrum: with
+    the covariance of the spectra's coordinates per unit continuum,
+    C = L Lᵀ, the singular value decomposition A L = U S Vᵀ gives the
+    coordinates y = Vᵀ L⁻¹ d, uncorrelated and ordered by their weight in
+    the channels, and A d = U S y exactly.  Keeping the first r, the error
+    of channel c at velocity v is bounded (Cauchy-Schwarz) by
+    ‖(U S)_{vc, ≥r}‖ ‖y_{≥r}‖, taken at its largest over the tabulated
+    velocities and the spectra, relative to the channel of the spectrum's
+    continuum; the smallest r whose bound is within ``tolerance`` is kept.
+
+    Parameters
+    ----------
+    basis : `ShiftBasis`
+    spectra : `numpy.ndarray` or callable
+        (n, J + 1): each spectrum's continuum (positive) then its J coordinates (`ShiftBasis.coordinates`);
+        or a function returning an iterable of such arrays (read twice: a large set a chunk at a time).
+    tolerance : float
+        Largest error allowed in any channel, relative to that channel of the spectrum's continuum.
+
+    Returns
+    -------
+    transform : `numpy.ndarray` or None
+        (r, J): the new coordinates are ``transform @ d``; None when no r < J is within the tolerance.
+    amplitudes : `numpy.ndarray`
+        (nv, C, r), in nm (``basis.amplitudes`` when ``transform`` is None).
+    bound : float
+        The bound on the relative error of the channels (0 when ``transform`` is None).
+
+    Examples
+    --------
+    >>> import astropy.units as u, numpy as np
+    >>> lam = np.linspace(676.73, 676.83, 51) * u.nm
+    >>> basis = shift_basis(lam)
+    >>> line = 1 - 0.5 * np.exp(-((lam.value - 676.78) / 0.008) ** 2)
+    >>> cont, coords = basis.coordinates(np.stack([line, 1 - 0.3 * (1 - line)]))
+    >>> transform, amplitudes, bound = reduced_basis(basis, np.column_stack([cont, coords]), 1e-6)
+    >>> transform.shape[0] < basis.rank, bound <= 1e-6
+    (True, True)
+    """
+    if not 0 < tolerance < 1:
+        raise ValueError(f"tolerance must be in (0, 1), got {tolerance!r}")
+    rank = basis.rank
+    chunks = spectra if callable(spectra) else (lambda: [spectra])
+
+    def coordinates():      # per unit continuum, a chunk at a time (a large library stays on disk)
+        for chunk in chunks():
+            chunk = np.asarray(chunk, dtype=np.float64)
+            if chunk.ndim != 2 or chunk.shape[1] != rank + 1 or not np.all(chunk[:, 0] > 0):
+                raise ValueError(f"spectra must be (n, {rank + 1}) rows with a positive continuum first")
+            yield chunk[:, 1:] / chunk[:, :1]
+
+    gram, count = np.zeros((rank, rank)), 0
+    for d in coordinates():
+        gram += d.T @ d
+        count += d.shape[0]
+    eigenvalues, q = np.linalg.eigh(gram / max(count, 1))
+    root = np.sqrt(np.maximum(eigenvalues, 1e-30 * max(eigenvalues.max(), 1e-300)))
+    matrix = basis.amplitudes.reshape(-1, rank)
+    left, singular, vt = np.linalg.svd(matrix @ (q * root), full_matrices=False)
+    to_y = vt @ (q / root).T                                   # y = to_y @ d
+    us = left * singular
+    # Tail norms: tail[r] = ‖x_{≥r}‖, for the spectra's y and the channels' rows of U S.
+    row_tail = np.zeros(rank)
+    for d in coordinates():
+        y2 = (d @ to_y.T) ** 2
+        row_tail = np.maximum(row_tail, np.sqrt(np.cumsum(y2[:, ::-1], axis=1)[:, ::-1]).max(axis=0))
+    channel_tail = (np.sqrt(np.cumsum((us ** 2)[:, ::-1], axis=1)[:, ::-1])
+                    / np.abs(basis.totals.reshape(-1))[:, None]).max(axis=0)
+    for r in range(1, rank):
+        bound = float(row_tail[r] * channel_tail[r])
+        if bound <= tolerance:
+            return to_y[:r], us[:, :r].reshape(basis.amplitudes.shape[:2] + (r,)), bound
+    return None, basis.amplitudes, 0.0
