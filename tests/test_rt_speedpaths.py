@@ -38,10 +38,10 @@ def test_faddeeva_fast_matches_scipy():
 
 
 def test_weideman_matches_scipy_over_the_solvers_range():
-    """`faddeeva_fast` is Weideman's 16-term approximation everywhere: the solver's y > 2 path and the core's
-    optical depth take it at any x.  A relative error e of w moves I, Q, U, V by at most ~e of the line's depth,
-    so 1e-6 of |w| leaves the 1e-4 Ic budget to the reference's W4; measured < 5e-7 (damping 1e-5 .. 10,
-    |x| <= 60, the solver's range and beyond)."""
+    """`faddeeva_fast` is Weideman's 16-term approximation everywhere: the solver's y > 2 path and the
+    core's optical depth take it at any x.  A relative error e of w moves I, Q, U, V by at most ~e of the
+    line's depth, so 1e-6 of |w| leaves the 1e-4 Ic budget to the reference's W4; measured < 5e-7
+    (damping 1e-5 .. 10, |x| <= 60, the solver's range and beyond)."""
     rng = np.random.default_rng(11)
     y = 10 ** rng.uniform(-5, 1, 4000)
     x = rng.uniform(-60, 60, y.size) * rng.uniform(0, 1, y.size) ** 2      # dense near the core

@@ -1,17 +1,20 @@
 r"""
 The Faddeeva function w(z) = e^{−z²} erfc(−i z) for the line profiles: H = Re w, 2F = Im w.
 
-`faddeeva` is Humlíček's (1982) W4, relative accuracy ~1e-4.  `w_weideman` is
-Weideman's (1994, SIAM J. Numer. Anal. 31, 1497, eq. 38-39) rational
-approximation with N = 16 terms, branch-free and valid in the whole upper half
-plane: relative error < 5e-7 of |w(z)| and < 2e-7 of w(i y) (measured against
-`scipy.special.wofz` for y ≥ 1e-5, |x| ≤ 60), the accuracy of the Taylor table it
-replaced; evaluated by Estrin's scheme (a short dependency chain: a vectorised
-loop of it is not latency-bound).  `faddeeva_fast` is it for one point;
-`w_region2` and `w_region1` are W4's cheap outer regions (|x| + y ≥ 5.5), which
-the vectorised solver uses there.  `sigma_taylor` gives the σ components of a
-Zeeman triplet from w at the π component's position (`sigma_taylor_vec`: for
-all wavelengths at once).
+`faddeeva` is Humlíček's (1982) W4, relative accuracy ~1e-4.  `w_table` covers
+W4's costly regions 3 and 4 (|x| + y < 5.5, y ≤ 2) in the vectorised solver:
+6th-order Taylor polynomials of w about nodes 0.2 apart, whose coefficients
+come from `scipy.special.wofz` and the recurrence of the derivatives
+(truncation error < 1e-7 of w(i y)); `w_region2` and `w_region1` are W4's cheap
+outer regions (|x| + y ≥ 5.5).  `w_weideman` is Weideman's (1994, SIAM Journal
+on Numerical Analysis 31, 1497, eq. 38-39) 16-term rational approximation,
+branch-free and valid in the whole upper half plane (relative error < 5e-7 of
+|w(z)|, measured against `scipy.special.wofz` for y ≥ 1e-5, |x| ≤ 60), by
+Estrin's scheme; `faddeeva_fast` is it for one point (the solver's rare paths:
+damping > 2, the core's optical depth).  In the solver's vectorised loops it is
+slower than the table (~80 vector operations per 4 points; ``benchmarks/README.md``,
+rt26).  `sigma_taylor` gives the σ components of a Zeeman triplet from w at the
+π component's position (`sigma_taylor_vec`: for all wavelengths at once).
 """
 from __future__ import annotations
 
