@@ -38,7 +38,7 @@ from gongsynth.sun.rt.kernels import solve_columns_reference
 from gongsynth.sun.rt.voigt import faddeeva
 
 #: Floating-point operations per voxel-wavelength of the fast solver with a weak field (the default run's
-#: common case), counted from `gongsynth.sun.rt.kernels._solve_ray`: x (2), w(z) (Taylor table 28 /
+#: common case), counted from `gongsynth.sun.rt.kernels._solve_rays`: x (2), w(z) (Taylor table 28 /
 #: W4 region 2 ~30 / region 1 ~14; ~24 on the default grid), σ by the Taylor recurrence (~70), the
 #: absorption-matrix elements (~20), Δτ and e^-Δτ (~22), the DELO weights (~10), the right-hand side (~40)
 #: and the 4 × 4 elimination (~45); 6 divisions, counted as 4 operations each.

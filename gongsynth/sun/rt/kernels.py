@@ -22,7 +22,7 @@ elimination needs no pivoting).  The ray starts at the deepest point where
 τ_c ≤ `TAU_BOTTOM` with the diffusion approximation and ignores the top layers
 above τ ≤ `TAU_TOP` at every wavelength.
 
-`solve_columns` is the fast implementation: per ray (`_solve_ray`) it
+`solve_columns` is the fast implementation: per ray (`_solve_rays`) it
 advances all wavelengths together point by point in loops the compiler
 vectorises, takes w(z) in W4's regions as contiguous runs of wavelengths
 (`_w_vec`: a Taylor table where Humlíček's W4 is slow, more accurate than W4
@@ -54,6 +54,7 @@ from gongsynth.sun.rt.voigt import (
     w_region1,
     w_region2,
     w_table,
+    w_weideman,
 )
 from gongsynth.threads import run_chunks
 
@@ -291,14 +292,14 @@ def _w_vec(dl, rd, shift, y, xs, wr, wi):
 
     W4's regions are contiguous runs of wavelengths, so each is a loop of its own that the compiler
     vectorises: the Taylor table where |x| + y < 5.5 (y ≤ `TABLE_YMAX`), W4's region 2 up to
-    |x| + y < 15, region 1 beyond; with y > `TABLE_YMAX` (rare) `faddeeva_fast` per wavelength.
+    |x| + y < 15, region 1 beyond; with y > `TABLE_YMAX` (rare) Weideman's `w_weideman`.
     """
     nl = dl.size
     for j in range(nl):
         xs[j] = dl[j] * rd - shift
     if y > TABLE_YMAX:
         for j in range(nl):
-            wr[j], wi[j] = faddeeva_fast(xs[j], y)
+            wr[j], wi[j] = w_weideman(xs[j], y)
         return
     b1 = 5.5 - y
     b2 = 15.0 - y
@@ -406,8 +407,8 @@ def solve_columns(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all
     Emergent Stokes spectra of a block of rays.
 
     The DELO-linear solution of the module docstring over the same points as
-    `solve_columns_reference`, computed faster (`_solve_ray`, one ray per
-    call, chunks of rays on the threads of `~gongsynth.threads.run_chunks`):
+    `solve_columns_reference`, computed faster (`_solve_rays`, one ray after
+    another, chunks of rays on the threads of `~gongsynth.threads.run_chunks`):
     all wavelengths are advanced together point by point (independent work
     for the processor between the steps of one recursion),
     w(z) in W4's regions as contiguous runs of wavelengths (`_w_vec`), and a ray
@@ -449,149 +450,150 @@ def solve_columns(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all
 
 @nb.njit(cache=True, nogil=True, error_model="numpy", fastmath=_CONTRACT)
 def _solve_rays(start, stop, dl, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all, damp_all, src_all,
-                vlos, bpar, b1, b2, out_i, out_q, out_u, out_v, log_tau_c, log_tau_core):
-    """Rays ``start`` to ``stop`` of `solve_columns` (``dl`` = λ − λ₀)."""
-    for p in range(start, stop):
-        _solve_ray(dl, lam0, lande_g, core_index, ds, kc_all[p], kl_all[p], dop_all[p], damp_all[p],
-                   src_all[p], vlos[p], bpar[p], b1[p], b2[p], out_i[p], out_q[p], out_u[p], out_v[p],
-                   log_tau_c[p], log_tau_core[p])
+                vlos_all, bpar_all, b1_all, b2_all, out_i, out_q, out_u, out_v, log_tau_c_all,
+                log_tau_core_all):
+    """
+    Rays ``start`` to ``stop`` of `solve_columns` (``dl`` = λ − λ₀), one after the other.
 
-
-@nb.njit(cache=True, error_model="numpy", fastmath=_CONTRACT)
-def _solve_ray(dl, lam0, lande_g, core_index, ds, kc, kl, dop_k, aa, bb, vlos, bpar, b1, b2, out_i, out_q,
-               out_u, out_v, log_tau_c, log_tau_core):
-    """One ray of `solve_columns` (its arguments for that ray; ``dl`` = λ − λ₀)."""
-    nz = kc.size
+    The ray loop is in this kernel, not around a per-ray kernel: one compile (a caller of a
+    compiled per-ray kernel re-optimised its inlined copy, ~2 s of CPU more on a first run).
+    """
+    nz = kc_all.shape[1]
     nl = dl.size
-    tc = 0.0
-    tm = 0.0
-    log_tau_c[nz - 1] = -12.0
-    kbot = 0
-    ktop = nz - 1
-    for k in range(nz - 2, -1, -1):
-        tc += 0.5 * (kc[k] + kc[k + 1]) * ds[k]
-        tm += 0.5 * ((kc[k] + kl[k]) + (kc[k + 1] + kl[k + 1])) * ds[k]
-        log_tau_c[k] = math.log10(max(tc, 1e-12))
-        if tm <= TAU_TOP:
-            ktop = k
-        if tc < TAU_BOTTOM:
-            kbot = k
-    kbot = max(kbot - 1, 0)
-    ktop = max(ktop, kbot + 1)
-    # The points' parameters, only where they are used: the integrated points (and all for the core's τ).
-    lo, hi = (0, nz) if core_index >= 0 else (kbot, ktop + 1)
-    pt = np.zeros((9, nz))        # 1/Δλ_D, v_los, v_B, κ_L/2, 1 - cos²γ, 1 + cos²γ, cos 2χ, sin 2χ, cos γ
-    polar = False
-    for k in range(lo, hi):
-        dop = dop_k[k]
-        pt[0, k] = 1.0 / dop
-        pt[1, k] = lam0 * vlos[k] / _C / dop
-        pt[3, k] = 0.5 * kl[k]
-        bz, bx, by = bpar[k], b1[k], b2[k]
-        b2sum = bz * bz + bx * bx + by * by
-        cg = 1.0
-        if b2sum > 0.0:
-            polar |= kbot <= k <= ktop
-            bb_ = math.sqrt(b2sum)
-            rb2 = 1.0 / b2sum
-            pt[2, k] = ZEEMAN_CM_PER_G * lam0 * lam0 * lande_g * bb_ / dop
-            cg = bz / bb_
-            pt[6, k] = (bx * bx - by * by) * rb2
-            pt[7, k] = 2.0 * bx * by * rb2
-        pt[4, k] = 1.0 - cg * cg
-        pt[5, k] = 1.0 + cg * cg
-        pt[8, k] = cg
-    wk = np.zeros((9, nl))
-    pr0, pr1, pr2, pr3, pr4, pr5, xs, wbr, wbi = wk[0], wk[1], wk[2], wk[3], wk[4], wk[5], wk[6], wk[7], wk[8]
-    sw = np.empty((4, nl))        # scratch of sigma_taylor_vec
-    # The DELO recursion and the absorption matrix in float32 (see the module docstring).
-    wf = np.zeros((20, nl), dtype=np.float32)
-    i0, i1, i2, i3, dt, ex = wf[0], wf[1], wf[2], wf[3], wf[4], wf[5]
-    eu = wf[6:13]                 # elements at the point below
-    ec = wf[13:20]                # and at the current point
-    # The bottom point only gives the elements (eu); each later one a step from the point below.
-    for k in range(kbot, ktop + 1):
-        first = k == kbot
-        dsk = _F(0.5 * ds[k - 1]) if not first else _ZERO
-        bu = _F(bb[k - 1])
-        bc = _F(bb[k])
-        rd, vs, vb, ak = pt[0, k], pt[1, k], pt[2, k], aa[k]
-        h, c1, c2, kck = _F(pt[3, k]), _F(pt[4, k]), _F(pt[5, k]), _F(kc[k])
-        _w_vec(dl, rd, vs, ak, xs, pr0, pr1)
-        if not polar:
-            for j in range(nl):
-                ei = kck + h * (_F(pr0[j]) * (c1 + c2))
-                dt[j] = (eu[0, j] + ei) * dsk
-                eu[0, j] = ei
-            if first:
+    for p in range(start, stop):
+        kc, kl, dop_k, aa, bb = kc_all[p], kl_all[p], dop_all[p], damp_all[p], src_all[p]
+        vlos, bpar, b1, b2 = vlos_all[p], bpar_all[p], b1_all[p], b2_all[p]
+        log_tau_c, log_tau_core = log_tau_c_all[p], log_tau_core_all[p]
+        tc = 0.0
+        tm = 0.0
+        log_tau_c[nz - 1] = -12.0
+        kbot = 0
+        ktop = nz - 1
+        for k in range(nz - 2, -1, -1):
+            tc += 0.5 * (kc[k] + kc[k + 1]) * ds[k]
+            tm += 0.5 * ((kc[k] + kl[k]) + (kc[k + 1] + kl[k + 1])) * ds[k]
+            log_tau_c[k] = math.log10(max(tc, 1e-12))
+            if tm <= TAU_TOP:
+                ktop = k
+            if tc < TAU_BOTTOM:
+                kbot = k
+        kbot = max(kbot - 1, 0)
+        ktop = max(ktop, kbot + 1)
+        # The points' parameters, only where they are used: the integrated points (and all for the core's τ).
+        lo, hi = (0, nz) if core_index >= 0 else (kbot, ktop + 1)
+        pt = np.zeros((9, nz))        # 1/Δλ_D, v_los, v_B, κ_L/2, 1 - cos²γ, 1 + cos²γ, cos 2χ, sin 2χ, cos γ
+        polar = False
+        for k in range(lo, hi):
+            dop = dop_k[k]
+            pt[0, k] = 1.0 / dop
+            pt[1, k] = lam0 * vlos[k] / _C / dop
+            pt[3, k] = 0.5 * kl[k]
+            bz, bx, by = bpar[k], b1[k], b2[k]
+            b2sum = bz * bz + bx * bx + by * by
+            cg = 1.0
+            if b2sum > 0.0:
+                polar |= kbot <= k <= ktop
+                bb_ = math.sqrt(b2sum)
+                rb2 = 1.0 / b2sum
+                pt[2, k] = ZEEMAN_CM_PER_G * lam0 * lam0 * lande_g * bb_ / dop
+                cg = bz / bb_
+                pt[6, k] = (bx * bx - by * by) * rb2
+                pt[7, k] = 2.0 * bx * by * rb2
+            pt[4, k] = 1.0 - cg * cg
+            pt[5, k] = 1.0 + cg * cg
+            pt[8, k] = cg
+        wk = np.zeros((9, nl))
+        pr0, pr1, pr2, pr3, pr4, pr5, xs, wbr, wbi = (wk[0], wk[1], wk[2], wk[3], wk[4], wk[5], wk[6], wk[7],
+                                                      wk[8])
+        sw = np.empty((4, nl))        # scratch of sigma_taylor_vec
+        # The DELO recursion and the absorption matrix in float32 (see the module docstring).
+        wf = np.zeros((20, nl), dtype=np.float32)
+        i0, i1, i2, i3, dt, ex = wf[0], wf[1], wf[2], wf[3], wf[4], wf[5]
+        eu = wf[6:13]                 # elements at the point below
+        ec = wf[13:20]                # and at the current point
+        # The bottom point only gives the elements (eu); each later one a step from the point below.
+        for k in range(kbot, ktop + 1):
+            first = k == kbot
+            dsk = _F(0.5 * ds[k - 1]) if not first else _ZERO
+            bu = _F(bb[k - 1])
+            bc = _F(bb[k])
+            rd, vs, vb, ak = pt[0, k], pt[1, k], pt[2, k], aa[k]
+            h, c1, c2, kck = _F(pt[3, k]), _F(pt[4, k]), _F(pt[5, k]), _F(kc[k])
+            _w_vec(dl, rd, vs, ak, xs, pr0, pr1)
+            if not polar:
+                for j in range(nl):
+                    ei = kck + h * (_F(pr0[j]) * (c1 + c2))
+                    dt[j] = (eu[0, j] + ei) * dsk
+                    eu[0, j] = ei
+                if first:
+                    continue
+                if k == kbot + 1:
+                    _diffusion(i0, i1, i2, i3, dt, bu, bc)
+                for j in range(nl):
+                    ex[j] = _exp_neg(dt[j])
+                for j in range(nl):
+                    # e I + α S_c + β S_u as I + α (S_c − I) + β (S_u − I) (α + β = 1 − e): no rounding of
+                    # an e near 1 (thin steps), which in float32 would accumulate along the ray.
+                    e, al, be = _weights(dt[j], ex[j])
+                    a0 = i0[j]
+                    i0[j] = a0 + (al * (bc - a0) + be * (bu - a0))
                 continue
-            if k == kbot + 1:
-                _diffusion(i0, i1, i2, i3, dt, bu, bc)
+            cq, cu, cv = _F(pt[6, k]), _F(pt[7, k]), _F(pt[8, k])
+            if vb == 0.0:
+                for j in range(nl):
+                    pr2[j] = pr0[j]
+                    pr3[j] = pr1[j]
+                    pr4[j] = 0.0
+                    pr5[j] = 0.0
+            elif vb <= VB_TAYLOR and ak <= TABLE_YMAX:
+                sigma_taylor_vec(xs, ak, vb, pr0, pr1, pr2, pr3, pr4, pr5, sw)
+            else:
+                _w_vec(dl, rd, vs - vb, ak, pr4, pr2, pr3)           # w(x + vb)
+                _w_vec(dl, rd, vs + vb, ak, pr4, wbr, wbi)           # w(x − vb)
+                for j in range(nl):
+                    hb, fb = pr2[j], pr3[j]
+                    pr2[j] = 0.5 * (hb + wbr[j])
+                    pr3[j] = 0.5 * (fb + wbi[j])
+                    pr4[j] = wbr[j] - hb
+                    pr5[j] = wbi[j] - fb
             for j in range(nl):
-                ex[j] = _exp_neg(dt[j])
-            for j in range(nl):
-                # e I + α S_c + β S_u as I + α (S_c − I) + β (S_u − I) (α + β = 1 − e): no rounding of an e
-                # near 1 (thin steps), which in float32 would accumulate along the ray.
-                e, al, be = _weights(dt[j], ex[j])
-                a0 = i0[j]
-                i0[j] = a0 + (al * (bc - a0) + be * (bu - a0))
-            continue
-        cq, cu, cv = _F(pt[6, k]), _F(pt[7, k]), _F(pt[8, k])
-        if vb == 0.0:
-            for j in range(nl):
-                pr2[j] = pr0[j]
-                pr3[j] = pr1[j]
-                pr4[j] = 0.0
-                pr5[j] = 0.0
-        elif vb <= VB_TAYLOR and ak <= TABLE_YMAX:
-            sigma_taylor_vec(xs, ak, vb, pr0, pr1, pr2, pr3, pr4, pr5, sw)
-        else:
-            _w_vec(dl, rd, vs - vb, ak, pr4, pr2, pr3)           # w(x + vb)
-            _w_vec(dl, rd, vs + vb, ak, pr4, wbr, wbi)           # w(x − vb)
-            for j in range(nl):
-                hb, fb = pr2[j], pr3[j]
-                pr2[j] = 0.5 * (hb + wbr[j])
-                pr3[j] = 0.5 * (fb + wbi[j])
-                pr4[j] = wbr[j] - hb
-                pr5[j] = wbi[j] - fb
+                hp, fp, hs = _F(pr0[j]), _F(pr1[j]), _F(pr2[j])
+                ei = kck + h * (hp * c1 + hs * c2)
+                g = h / ei
+                t = g * (hp - hs)
+                r = g * (fp - _F(pr3[j]))
+                ec[0, j] = ei
+                ec[1, j] = t * cq
+                ec[2, j] = t * cu
+                ec[3, j] = g * _F(pr4[j]) * cv
+                ec[4, j] = r * cq
+                ec[5, j] = r * cu
+                ec[6, j] = g * _F(pr5[j]) * cv
+                dt[j] = (eu[0, j] + ei) * dsk
+            if not first:
+                if k == kbot + 1:
+                    _diffusion(i0, i1, i2, i3, dt, bu, bc)
+                for j in range(nl):
+                    ex[j] = _exp_neg(dt[j])
+                _step(i0, i1, i2, i3, eu, ec, dt, ex, bu, bc)
+            eu, ec = ec, eu
         for j in range(nl):
-            hp, fp, hs = _F(pr0[j]), _F(pr1[j]), _F(pr2[j])
-            ei = kck + h * (hp * c1 + hs * c2)
-            g = h / ei
-            t = g * (hp - hs)
-            r = g * (fp - _F(pr3[j]))
-            ec[0, j] = ei
-            ec[1, j] = t * cq
-            ec[2, j] = t * cu
-            ec[3, j] = g * _F(pr4[j]) * cv
-            ec[4, j] = r * cq
-            ec[5, j] = r * cu
-            ec[6, j] = g * _F(pr5[j]) * cv
-            dt[j] = (eu[0, j] + ei) * dsk
-        if not first:
-            if k == kbot + 1:
-                _diffusion(i0, i1, i2, i3, dt, bu, bc)
-            for j in range(nl):
-                ex[j] = _exp_neg(dt[j])
-            _step(i0, i1, i2, i3, eu, ec, dt, ex, bu, bc)
-        eu, ec = ec, eu
-    for j in range(nl):
-        out_i[j] = i0[j]
-        out_q[j] = i1[j]
-        out_u[j] = i2[j]
-        out_v[j] = i3[j]
-    if core_index < 0:
-        return
-    # Optical depth at the core wavelength along the whole ray.
-    j = core_index
-    tau = 0.0
-    log_tau_core[nz - 1] = -12.0
-    k = nz - 1
-    en0 = _fast_elements(dl[j] * pt[0, k] - pt[1, k], aa[k], pt[2, k], kc[k], pt[3, k], pt[4, k],
-                         pt[5, k], pt[6, k], pt[7, k], pt[8, k])[0]
-    for k in range(nz - 2, -1, -1):
-        ec0 = _fast_elements(dl[j] * pt[0, k] - pt[1, k], aa[k], pt[2, k], kc[k], pt[3, k], pt[4, k],
+            out_i[p, j] = i0[j]
+            out_q[p, j] = i1[j]
+            out_u[p, j] = i2[j]
+            out_v[p, j] = i3[j]
+        if core_index < 0:
+            continue
+        # Optical depth at the core wavelength along the whole ray.
+        j = core_index
+        tau = 0.0
+        log_tau_core[nz - 1] = -12.0
+        k = nz - 1
+        en0 = _fast_elements(dl[j] * pt[0, k] - pt[1, k], aa[k], pt[2, k], kc[k], pt[3, k], pt[4, k],
                              pt[5, k], pt[6, k], pt[7, k], pt[8, k])[0]
-        tau += 0.5 * (ec0 + en0) * ds[k]
-        log_tau_core[k] = math.log10(max(tau, 1e-12))
-        en0 = ec0
+        for k in range(nz - 2, -1, -1):
+            ec0 = _fast_elements(dl[j] * pt[0, k] - pt[1, k], aa[k], pt[2, k], kc[k], pt[3, k], pt[4, k],
+                                 pt[5, k], pt[6, k], pt[7, k], pt[8, k])[0]
+            tau += 0.5 * (ec0 + en0) * ds[k]
+            log_tau_core[k] = math.log10(max(tau, 1e-12))
+            en0 = ec0

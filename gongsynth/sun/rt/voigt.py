@@ -1,14 +1,20 @@
 r"""
 The Faddeeva function w(z) = e^{−z²} erfc(−i z) for the line profiles: H = Re w, 2F = Im w.
 
-`faddeeva` is Humlíček's (1982) W4, relative accuracy ~1e-4.  `faddeeva_fast`
-keeps W4's cheap rational regions (|x| + y ≥ 5.5) and replaces its costly ones
-by a table: 6th-order Taylor polynomials of w about nodes 0.2 apart (|x| ≤ 5.6,
-0 ≤ y ≤ 2), whose coefficients come from `scipy.special.wofz` and the
-recurrence of the derivatives (truncation error < 1e-7 of w(i y)).
-`w_table`, `w_region2` and `w_region1` are the branch-free pieces used in vectorised loops;
-`sigma_taylor` gives the σ components of a Zeeman triplet from w at the π
-component's position (`sigma_taylor_vec`: for all wavelengths at once).
+`faddeeva` is Humlíček's (1982) W4, relative accuracy ~1e-4.  `w_table` covers
+W4's costly regions 3 and 4 (|x| + y < 5.5, y ≤ 2) in the vectorised solver:
+6th-order Taylor polynomials of w about nodes 0.2 apart, whose coefficients
+come from `scipy.special.wofz` and the recurrence of the derivatives
+(truncation error < 1e-7 of w(i y)); `w_region2` and `w_region1` are W4's cheap
+outer regions (|x| + y ≥ 5.5).  `w_weideman` is Weideman's (1994, SIAM Journal
+on Numerical Analysis 31, 1497, eq. 38-39) 16-term rational approximation,
+branch-free and valid in the whole upper half plane (relative error < 5e-7 of
+|w(z)|, measured against `scipy.special.wofz` for y ≥ 1e-5, |x| ≤ 60), by
+Estrin's scheme; `faddeeva_fast` is it for one point (the solver's rare paths:
+damping > 2, the core's optical depth).  In the solver's vectorised loops it is
+slower than the table (~80 vector operations per 4 points; ``benchmarks/README.md``,
+rt26).  `sigma_taylor` gives the σ components of a Zeeman triplet from w at the
+π component's position (`sigma_taylor_vec`: for all wavelengths at once).
 """
 from __future__ import annotations
 
@@ -18,8 +24,8 @@ import numba as nb
 import numpy as np
 from scipy.special import wofz
 
-__all__ = ["faddeeva", "faddeeva_fast", "w_table", "w_region1", "w_region2", "sigma_taylor",
-           "sigma_taylor_vec", "TABLE_STEP", "TABLE_YMAX"]
+__all__ = ["faddeeva", "faddeeva_fast", "w_weideman", "w_table", "w_region1", "w_region2", "sigma_taylor",
+           "sigma_taylor_vec", "TABLE_STEP", "TABLE_YMAX", "WEIDEMAN_N"]
 
 #: Node spacing of the Taylor table.
 TABLE_STEP = 0.2
@@ -44,6 +50,29 @@ def _faddeeva_table():
 
 
 _TABLE = _faddeeva_table()
+
+#: Terms of Weideman's approximation (N in his eq. 38).
+WEIDEMAN_N = 16
+
+
+def _weideman_coefficients(n):
+    """
+    (L, a_0 … a_{N−1}) of Weideman (1994) eq. 38: w(z) ≈ 2 p(Z)/(L − i z)² + 1/(√π (L − i z)), p(Z) = Σ aₙ Zⁿ.
+
+    Z = (L + i z)/(L − i z), L = √(N/√2) (his eq. 39); aₙ are the Fourier coefficients of
+    e^{−t²}(L² + t²) in θ, t = L tan(θ/2), computed by the trapezoidal rule on 4N points (his §4).
+    """
+    m = 2 * n
+    lam = math.sqrt(n / math.sqrt(2.0))
+    theta = np.arange(-m + 1, m) * math.pi / m
+    t = lam * np.tan(theta / 2.0)
+    f = np.concatenate([[0.0], np.exp(-t * t) * (lam * lam + t * t)])
+    a = np.fft.fft(np.fft.fftshift(f)).real / (2 * m)
+    return lam, tuple(float(v) for v in a[1:n + 1])
+
+
+_WL, _WA = _weideman_coefficients(WEIDEMAN_N)
+_RSQPI = 1.0 / math.sqrt(math.pi)
 
 
 @nb.njit(cache=True, inline="always")
@@ -72,15 +101,68 @@ def faddeeva(x, y):
 
 
 
+@nb.njit(cache=True, inline="always")
+def _cmul(ar, ai, br, bi):
+    return ar * br - ai * bi, ar * bi + ai * br
+
+
+@nb.njit(cache=True, inline="always")
+def w_weideman(x, y):
+    """
+    Re and Im of w(x + i y), y ≥ 0, by Weideman's (1994) 16-term rational approximation.
+
+    Relative error < 5e-7 (of |w|; < 2e-7 of w(i y)) anywhere in the upper half plane; no branch, no
+    table, one division: loops of it vectorise.  p(Z) by Estrin's scheme (pairs, then Z², Z⁴, Z⁸).
+
+    Parameters
+    ----------
+    x, y : float
+        The argument (y ≥ 0).
+
+    Returns
+    -------
+    tuple of float
+        Re w, Im w.
+
+    Examples
+    --------
+    >>> round(w_weideman(0.0, 0.05)[0], 6)     # scipy.special.wofz(0.05j) = 0.9459900...
+    0.94599
+    """
+    lp = _WL + y
+    d = 1.0 / (lp * lp + x * x)
+    rr = lp * d                            # 1/(L − i z) = rr + i ri
+    ri = x * d
+    zr = (_WL * _WL - y * y - x * x) * d   # Z = (L + i z)/(L − i z)
+    zi = 2.0 * _WL * x * d
+    a = _WA
+    z2r, z2i = _cmul(zr, zi, zr, zi)
+    z4r, z4i = _cmul(z2r, z2i, z2r, z2i)
+    z8r, z8i = _cmul(z4r, z4i, z4r, z4i)
+    # a₂ₖ + a₂ₖ₊₁ Z, then pairs of those with Z², Z⁴, Z⁸.
+    tr, ti = _cmul(z2r, z2i, a[2] + a[3] * zr, a[3] * zi)
+    r0r, r0i = a[0] + a[1] * zr + tr, a[1] * zi + ti
+    tr, ti = _cmul(z2r, z2i, a[6] + a[7] * zr, a[7] * zi)
+    r1r, r1i = a[4] + a[5] * zr + tr, a[5] * zi + ti
+    tr, ti = _cmul(z2r, z2i, a[10] + a[11] * zr, a[11] * zi)
+    r2r, r2i = a[8] + a[9] * zr + tr, a[9] * zi + ti
+    tr, ti = _cmul(z2r, z2i, a[14] + a[15] * zr, a[15] * zi)
+    r3r, r3i = a[12] + a[13] * zr + tr, a[13] * zi + ti
+    tr, ti = _cmul(z4r, z4i, r1r, r1i)
+    s0r, s0i = r0r + tr, r0i + ti
+    tr, ti = _cmul(z4r, z4i, r3r, r3i)
+    s1r, s1i = r2r + tr, r2i + ti
+    tr, ti = _cmul(z8r, z8i, s1r, s1i)
+    pr, pi_ = s0r + tr, s0i + ti
+    sr, si = _cmul(rr, ri, rr, ri)
+    qr, qi = _cmul(pr, pi_, sr, si)
+    return 2.0 * qr + _RSQPI * rr, 2.0 * qi + _RSQPI * ri
+
+
 @nb.njit(cache=True)
 def faddeeva_fast(x, y):
     """
-    Re and Im of w(x + i y), y ≥ 0: Humlíček's W4 where |x| + y ≥ 5.5, else a Taylor table.
-
-    Where |x| + y < 5.5 and y ≤ 2 (Humlíček's costly regions 3 and 4) w is the
-    6th-order Taylor polynomial about the nearest node of a 0.2-step grid whose
-    coefficients come from `scipy.special.wofz` (error < 1e-7 of w(i y)); with
-    y > 2 there W4's region 3.  Elsewhere identical to `faddeeva`.
+    Re and Im of w(x + i y), y ≥ 0, by `w_weideman` (relative error < 5e-7).
 
     Parameters
     ----------
@@ -98,17 +180,7 @@ def faddeeva_fast(x, y):
     >>> round(h, 6)                 # scipy.special.wofz(0.05j) = 0.9459900...
     0.94599
     """
-    s = abs(x) + y
-    if s >= 15.0:
-        return w_region1(x, y)
-    if s >= 5.5:
-        return w_region2(x, y)
-    if y <= TABLE_YMAX:
-        return w_table(x, y)
-    t = complex(y, -x)
-    w = ((16.4955 + t * (20.20933 + t * (11.96482 + t * (3.778987 + t * 0.5642236))))
-         / (16.4955 + t * (38.82363 + t * (39.27121 + t * (21.69274 + t * (6.699398 + t))))))
-    return w.real, w.imag
+    return w_weideman(x, y)
 
 
 @nb.njit(cache=True, inline="always")
