@@ -114,6 +114,9 @@ sphinx_gallery_conf = {
     "backreferences_dir": "generated/modules",
     "within_subsection_order": "gongsynth_gallery.StoryOrder",
     "min_reported_time": 1,
+    # Two examples at a time (joblib processes): in CI the documentation builds beside the tests and
+    # outlives them by minutes, when one example process would leave the second core idle.
+    "parallel": 2,
     # Show printed output, not the repr of a cell's last expression (Legend objects...).
     "capture_repr": (),
 }
