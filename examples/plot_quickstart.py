@@ -8,6 +8,7 @@ Quick start: a GONG magnetogram in three lines
 transfer of Ni I 676.8 nm along the rays of the viewing angle, GONG's filters,
 optics and camera and the GONG reduction — and returns sunpy Maps.
 """
+# sphinx_gallery_parallel = False
 # %%
 # Three lines: import, simulate, plot.  ``detector_shape=256`` keeps this
 # example quick (the default is GONG's full 860 × 860 detector), and the

@@ -108,6 +108,7 @@ def test_six_plane_reading_halves_the_levels(intensity):
         real_count_levels(intensity, phase_planes=4)
 
 
+@pytest.mark.validation
 def test_real_noise_rules_out_the_six_plane_reading(intensity, magnetogram):
     """A simulation at the real level of each reading, against the real map's noise.
 

@@ -268,6 +268,7 @@ def test_bad_input_is_rejected():
 
 # ------------------------------------------------- optional: true radiative transfer
 @pytest.mark.slow
+@pytest.mark.validation
 def test_me_line_is_realistic_against_lightweaver_falc():
     """LTE polarised transfer in FAL-C (lightweaver) vs the ME line: same depth, V and sign."""
     import warnings
