@@ -30,7 +30,7 @@ The numbers of ``docs/guide/sun_ensemble.rst`` came from::
         --instrument hmi --seeds 1 2 --latitudes 0 25 45 60 70 75 \
         --variants default small-spot large-umbra plage-elements
     python scripts/sun_ensemble.py --rst --weak-flux docs/guide/sun_ensemble_weak_flux_mdi.ecsv --cache runs \
-        --instrument mdi --seeds 1 --latitudes 0 25 45 60 70 75 \
+        --instrument mdi --seeds 1 2 --latitudes 0 25 45 60 70 75 \
         --variants default small-spot large-umbra plage-elements
 
 (``--rst`` also writes the tables the guide page includes.)  The
