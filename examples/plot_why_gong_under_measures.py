@@ -274,14 +274,14 @@ plt.show()
 # is about 1.
 #
 # At 60° the spot's push is balanced by one the other way: without the spot the
-# factor falls to 0.69 — GONG then reads *more* weak flux than the truth
+# factor falls to 0.72 — GONG then reads *more* weak flux than the truth
 # holds.  Seen at an angle, the mostly horizontal internetwork field points
 # toward the observer on one side of a granule and away on the other, where
 # the brightness differs; the blurred truth cancels the two by area, GONG's
 # blurred light by brightness (our reading, consistent with the factor of
-# 1.02 without blur; not separated further).  The ingredients the papers name
+# 1.07 without blur; not separated further).  The ingredients the papers name
 # — the elements' heat (line weakening), their Wilson depression and canopy,
-# the inclined rays — each move the factor by less than 0.015.
+# the inclined rays — each move the factor by 0.01 or less.
 
 ablations = table[np.isfinite(table["change"])]
 for row in ablations:

@@ -19,9 +19,11 @@ SUNS = {"milne-eddington": model_photosphere, "model-atmosphere": model_atmosphe
 #: A run's default grid of a built-in Sun where it differs from the builder's.  The 3-D Sun's radiative
 #: transfer takes minutes at its builder's 1024² columns of 96 km; a run covers the same 98 Mm box
 #: (the papers' area, with room for the sunspot) with 256² columns of 384 km, which keeps the default
-#: run under a minute.  The weak-flux factor does not depend on the column size (seeds 1 and 2:
+#: run under a minute.  The weak-flux factor does not depend on the column size (seeds 1 and 2, on the
+#: Sun of issue 14:
 #: 1.23 / 1.00 at 0° / 60° with 384 km columns, 1.25 / 1.00 with 192 km, 1.22 / 0.99 with 96 km) but
-#: on the sunspot, which needs a box of 35 Mm or more: without it 0.94 / 0.69 (98 Mm box), and a 25 Mm
+#: on the sunspot, which needs a box of 35 Mm or more: without it 0.94 / 0.69 (98 Mm box; today's Sun:
+#: 0.98 / 0.72 against 1.32 / 1.05, ``data/weak_flux_factors.ecsv``), and a 25 Mm
 #: box of 96 km columns, too small for a spot, gives 1.06 / 0.69.
 RUN_GRIDS = {"model-atmosphere": {"shape": (256, 256), "pixel_size": 384 * u.km}}
 
