@@ -433,47 +433,6 @@ def solve_columns(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all
                    dop_all, damp_all, vlos, bpar, b1, b2, log_tau_core)
 
 
-@nb.njit(cache=True, inline="always")
-def _polar_elements(dl, rd, vs, vb, ak, h, c1, c2, cq, cu, cv, kck, dsk, xs, pr0, pr1, pr2, pr3, pr4, pr5,
-                    wbr, wbi, sw, eu, ec, dt):
-    """
-    The point's absorption matrix ``ec`` (float32) and the steps' Δτ ``dt`` where the ray has a field:
-    σ± by the Taylor series about π's w(z) (``pr0``, ``pr1``) for weak splitting, else by `_w_vec`.
-    """
-    nl = dl.size
-    if vb == 0.0:
-        for j in range(nl):
-            pr2[j] = pr0[j]
-            pr3[j] = pr1[j]
-            pr4[j] = 0.0
-            pr5[j] = 0.0
-    elif vb <= VB_TAYLOR and ak <= TABLE_YMAX:
-        sigma_taylor_vec(xs, ak, vb, pr0, pr1, pr2, pr3, pr4, pr5, sw)
-    else:
-        _w_vec(dl, rd, vs - vb, ak, pr4, pr2, pr3)           # w(x + vb)
-        _w_vec(dl, rd, vs + vb, ak, pr4, wbr, wbi)           # w(x − vb)
-        for j in range(nl):
-            hb, fb = pr2[j], pr3[j]
-            pr2[j] = 0.5 * (hb + wbr[j])
-            pr3[j] = 0.5 * (fb + wbi[j])
-            pr4[j] = wbr[j] - hb
-            pr5[j] = wbi[j] - fb
-    for j in range(nl):
-        hp, fp, hs = _F(pr0[j]), _F(pr1[j]), _F(pr2[j])
-        ei = kck + h * (hp * c1 + hs * c2)
-        g = h / ei
-        t = g * (hp - hs)
-        r = g * (fp - _F(pr3[j]))
-        ec[0, j] = ei
-        ec[1, j] = t * cq
-        ec[2, j] = t * cu
-        ec[3, j] = g * _F(pr4[j]) * cv
-        ec[4, j] = r * cq
-        ec[5, j] = r * cu
-        ec[6, j] = g * _F(pr5[j]) * cv
-        dt[j] = (eu[0, j] + ei) * dsk
-
-
 @nb.njit(cache=True, nogil=True, error_model="numpy", fastmath=_CONTRACT)
 def _solve_rays(start, stop, dl, lam0, lande_g, ds, kc_all, kl_all, dop_all, damp_all, src_all,
                 vlos_all, bpar_all, b1_all, b2_all, out_i, out_q, out_u, out_v, log_tau_c_all):
@@ -530,25 +489,58 @@ def _solve_rays(start, stop, dl, lam0, lande_g, ds, kc_all, kl_all, dop_all, dam
                     ei = kck + h * (_F(pr0[j]) * (c1 + c2))
                     dt[j] = (eu[0, j] + ei) * dsk
                     eu[0, j] = ei
+                if first:
+                    continue
+                if k == kbot + 1:
+                    _diffusion(i0, i1, i2, i3, dt, bu, bc)
+                for j in range(nl):
+                    ex[j] = _exp_neg(dt[j])
+                for j in range(nl):
+                    # e I + α S_c + β S_u as I + α (S_c − I) + β (S_u − I) (α + β = 1 − e): no rounding of
+                    # an e near 1 (thin steps), which in float32 would accumulate along the ray.
+                    e, al, be = _weights(dt[j], ex[j])
+                    a0 = i0[j]
+                    i0[j] = a0 + (al * (bc - a0) + be * (bu - a0))
+                continue
+            cq, cu, cv = _F(pt[6, k]), _F(pt[7, k]), _F(pt[8, k])
+            if vb == 0.0:
+                for j in range(nl):
+                    pr2[j] = pr0[j]
+                    pr3[j] = pr1[j]
+                    pr4[j] = 0.0
+                    pr5[j] = 0.0
+            elif vb <= VB_TAYLOR and ak <= TABLE_YMAX:
+                sigma_taylor_vec(xs, ak, vb, pr0, pr1, pr2, pr3, pr4, pr5, sw)
             else:
-                _polar_elements(dl, rd, vs, vb, ak, h, c1, c2, _F(pt[6, k]), _F(pt[7, k]), _F(pt[8, k]), kck,
-                                dsk, xs, pr0, pr1, pr2, pr3, pr4, pr5, wbr, wbi, sw, eu, ec, dt)
+                _w_vec(dl, rd, vs - vb, ak, pr4, pr2, pr3)           # w(x + vb)
+                _w_vec(dl, rd, vs + vb, ak, pr4, wbr, wbi)           # w(x − vb)
+                for j in range(nl):
+                    hb, fb = pr2[j], pr3[j]
+                    pr2[j] = 0.5 * (hb + wbr[j])
+                    pr3[j] = 0.5 * (fb + wbi[j])
+                    pr4[j] = wbr[j] - hb
+                    pr5[j] = wbi[j] - fb
+            for j in range(nl):
+                hp, fp, hs = _F(pr0[j]), _F(pr1[j]), _F(pr2[j])
+                ei = kck + h * (hp * c1 + hs * c2)
+                g = h / ei
+                t = g * (hp - hs)
+                r = g * (fp - _F(pr3[j]))
+                ec[0, j] = ei
+                ec[1, j] = t * cq
+                ec[2, j] = t * cu
+                ec[3, j] = g * _F(pr4[j]) * cv
+                ec[4, j] = r * cq
+                ec[5, j] = r * cu
+                ec[6, j] = g * _F(pr5[j]) * cv
+                dt[j] = (eu[0, j] + ei) * dsk
             if not first:
                 if k == kbot + 1:
                     _diffusion(i0, i1, i2, i3, dt, bu, bc)
                 for j in range(nl):
                     ex[j] = _exp_neg(dt[j])
-                if polar:
-                    _step(i0, i1, i2, i3, eu, ec, dt, ex, bu, bc)
-                else:
-                    for j in range(nl):
-                        # e I + α S_c + β S_u as I + α (S_c − I) + β (S_u − I) (α + β = 1 − e): no rounding
-                        # of an e near 1 (thin steps), which in float32 would accumulate along the ray.
-                        e, al, be = _weights(dt[j], ex[j])
-                        a0 = i0[j]
-                        i0[j] = a0 + (al * (bc - a0) + be * (bu - a0))
-            if polar:
-                eu, ec = ec, eu
+                _step(i0, i1, i2, i3, eu, ec, dt, ex, bu, bc)
+            eu, ec = ec, eu
         for j in range(nl):
             out_i[p, j] = i0[j]
             out_q[p, j] = i1[j]
