@@ -16,8 +16,10 @@ longest chain of compiles that follows each task, so the radiative transfer's
 solver chain starts at once and the short kernels fill in beside it); a callee
 compiled by the other process is loaded from the cache, not compiled again.
 The first compiler is a new Python process (it imports only the kernels'
-modules: a stub ``gongsynth`` package skips the package's ``__init__``, which
-imports sunpy.map); where the platform forks (Linux), the second is a fork of
+modules: stub packages skip the ``__init__`` of ``gongsynth`` and of the
+kernels' own packages, which import sunpy.map, scipy.signal and the rest of
+the package, `_StubPackages`; the kernels live in modules that import little);
+where the platform forks (Linux), the second is a fork of
 the run itself once it has imported those modules and set numba up, which it
 needs anyway: that saves the second compiler's ~2 s of imports.  They work
 while the run imports its libraries and builds its photosphere.  A stage calls
@@ -31,7 +33,9 @@ Safety:
 
 - A run starts compilers only when the kernels are not compiled yet: a
   finished compile leaves a record (`MANIFEST`) of the numba cache files and
-  the stamps of their sources, and a whole record means nothing to do.
+  the stamps of their sources, and a whole record means nothing to do.  The
+  compilers note each task's cache file as they go; the last one to end writes
+  the record from those notes (no module to import while the run waits).
 - Two first runs at once: their compilers take turns on a lock file in the
   numba cache, and the later ones find the record whole.  numba writes each
   cache file atomically, so a run that compiles a kernel itself at the same
