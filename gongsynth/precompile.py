@@ -16,8 +16,10 @@ longest chain of compiles that follows each task, so the radiative transfer's
 solver chain starts at once and the short kernels fill in beside it); a callee
 compiled by the other process is loaded from the cache, not compiled again.
 The first compiler is a new Python process (it imports only the kernels'
-modules: a stub ``gongsynth`` package skips the package's ``__init__``, which
-imports sunpy.map); where the platform forks (Linux), the second is a fork of
+modules: stub packages skip the ``__init__`` of ``gongsynth`` and of the
+kernels' own packages, which import sunpy.map, scipy.signal and the rest of
+the package, `_StubPackages`; the kernels live in modules that import little);
+where the platform forks (Linux), the second is a fork of
 the run itself once it has imported those modules and set numba up, which it
 needs anyway: that saves the second compiler's ~2 s of imports.  They work
 while the run imports its libraries and builds its photosphere.  A stage calls
@@ -31,7 +33,9 @@ Safety:
 
 - A run starts compilers only when the kernels are not compiled yet: a
   finished compile leaves a record (`MANIFEST`) of the numba cache files and
-  the stamps of their sources, and a whole record means nothing to do.
+  the stamps of their sources, and a whole record means nothing to do.  The
+  compilers note each task's cache file as they go; the last one to end writes
+  the record from those notes (no module to import while the run waits).
 - Two first runs at once: their compilers take turns on a lock file in the
   numba cache, and the later ones find the record whole.  numba writes each
   cache file atomically, so a run that compiles a kernel itself at the same
@@ -73,15 +77,60 @@ KERNELS = Path(__file__).parent / "data" / "precompile_kernels.json"
 #: Compiler processes on a machine of two cores or more (one on one core).
 WORKERS = 2
 
-# The compiler process: a stub package (no gongsynth/__init__: no sunpy), then `_compile_here`.
-_BOOT = ("import importlib.machinery, sys, types\n"
-         "pkg = types.ModuleType('gongsynth')\n"
-         "pkg.__path__ = [sys.argv[1]]\n"
-         "pkg.__spec__ = importlib.machinery.ModuleSpec('gongsynth', None, is_package=True)\n"
-         "pkg.__spec__.submodule_search_locations = [sys.argv[1]]\n"
-         "sys.modules['gongsynth'] = pkg\n"
-         "from gongsynth import precompile\n"
-         "sys.exit(precompile._compile_here(sys.argv[2], int(sys.argv[3]), sys.argv[4]))\n")
+# The compiler process: stub packages (no gongsynth/__init__: no sunpy; nor the ``__init__`` of the
+# kernels' own packages: `_StubPackages`), then `_compile_here`.
+_STUBS = ("import importlib.machinery, sys, types\n"
+          "pkg = types.ModuleType('gongsynth')\n"
+          "pkg.__path__ = [sys.argv[1]]\n"
+          "pkg.__spec__ = importlib.machinery.ModuleSpec('gongsynth', None, is_package=True)\n"
+          "pkg.__spec__.submodule_search_locations = [sys.argv[1]]\n"
+          "sys.modules['gongsynth'] = pkg\n"
+          "from gongsynth import precompile\n"
+          "sys.meta_path.insert(0, precompile._StubPackages(sys.argv[1], sys.argv[2]))\n")
+_BOOT = _STUBS + ("code = precompile._compile_here(sys.argv[2], int(sys.argv[3]), sys.argv[4])\n"
+                  "import os\n"
+                  "os._exit(code)   # no interpreter teardown (numba, LLVM): the run waits for this exit\n")
+
+
+class _StubPackages:
+    """
+    An import finder for the compiler process: the packages that hold the kernels' modules, empty.
+
+    A kernel's module needs its own imports only; its packages' ``__init__`` import the rest
+    of the package (``gongsynth.sun.rt`` the synthesis with scipy.signal and reproject,
+    ``gongsynth.sun.model_atmosphere`` sunpy.map): ~1 s of CPU that a compiler spent before its
+    first kernel.  Other packages are imported as they are.  A kernel module that needed a
+    name of its package's ``__init__`` would fail to import here, and the run would compile
+    its kernels itself (``tests/test_precompile.py`` imports the shipped list's modules so).
+
+    Parameters
+    ----------
+    root : path-like
+        The ``gongsynth`` package's folder.
+    kernels : path-like
+        The compile tasks (`KERNELS`): their modules' packages are the ones left empty.
+    """
+
+    def __init__(self, root, kernels):
+        self.root = Path(root)
+        self.packages = {module.rsplit(".", n)[0] for module in {t["module"] for t in load_kernels(kernels)}
+                         for n in range(1, module.count("."))}
+
+    def find_spec(self, name, path=None, target=None):
+        import importlib.machinery
+
+        if name not in self.packages:
+            return None
+        spec = importlib.machinery.ModuleSpec(name, self, is_package=True)
+        spec.submodule_search_locations = [str(self.root.joinpath(*name.split(".")[1:]))]
+        return spec
+
+    def create_module(self, spec):
+        return None          # the default module, its __path__ from the spec
+
+    def exec_module(self, module):
+        pass                 # no __init__ code
+
 
 # A task's state in the queue file (one byte per task): free, claimed by compiler ``1 + n``, done.
 _FREE, _DONE = 0, 255
@@ -369,10 +418,11 @@ def wait(stage=None, *, progress=True):
                 job.wait()
             _jobs.clear()
             _queue[0] = None
-        try:
-            queue.unlink()
-        except OSError:
-            pass
+        for path in (queue, Path(f"{queue}.entries")):
+            try:
+                path.unlink()
+            except OSError:
+                pass
         if progress and _said[0]:
             from sunpy import log
 
@@ -429,6 +479,7 @@ def _compile_here(kernels, worker, queue):
                 dispatcher = getattr(importlib.import_module(task["module"]), task["function"])
                 for argtypes in task["signatures"]:
                     dispatcher.compile(tuple(_argument_type(t) for t in argtypes))
+                _note(queue, number, dispatcher)
             except Exception:   # a stale entry: the run compiles that kernel itself
                 failed += 1
             _set(queue, number, _DONE)
@@ -437,7 +488,7 @@ def _compile_here(kernels, worker, queue):
                     log.write(f"{worker} {task['function']} {began[0]:.3f} {time.time():.3f} "
                               f"{time.process_time() - began[1]:.3f}\n")
     with _turns(folder / "gongsynth-precompile.lock"):
-        _record(folder, kernels, tasks)
+        _record(folder, kernels, tasks, queue)
     return 1 if failed else 0
 
 
@@ -506,26 +557,37 @@ class _turns:
         self.file.close()      # releases the lock
 
 
-def _record(folder, kernels, tasks):
-    """Write `MANIFEST` when every task of ``tasks`` has a numba cache index."""
-    import importlib
+def _note(queue, number, dispatcher):
+    """
+    Add task ``number``'s numba cache index, its source and the source's stamp to the queue's
+    entries (``<queue>.entries``, a JSON line each): the record is written from them, without
+    importing the other compiler's modules.
+    """
+    index = dispatcher._cache._cache_file._index_path
+    source = dispatcher.py_func.__code__.co_filename
+    st = os.stat(source)
+    with _turns(queue):
+        with open(f"{queue}.entries", "a") as file:
+            file.write(json.dumps([number, index, source, [st.st_mtime, st.st_size]]) + "\n")
 
+
+def _record(folder, kernels, tasks, queue):
+    """Write `MANIFEST` when every task of ``tasks`` has an entry (`_note`) and its numba cache index."""
     import numba
 
-    entries = []
-    for task in tasks:
-        try:
-            dispatcher = getattr(importlib.import_module(task["module"]), task["function"])
-            index = dispatcher._cache._cache_file._index_path
-            source = dispatcher.py_func.__code__.co_filename
-        except Exception:
-            return
-        if not os.path.exists(index):
-            return      # another compiler still works: it writes the record when it ends
-        st = os.stat(source)
-        entries.append((index, source, [st.st_mtime, st.st_size]))
+    try:
+        with _turns(queue):
+            lines = Path(f"{queue}.entries").read_text().splitlines()
+    except OSError:
+        return
+    found = {}
+    for line in lines:
+        number, index, source, stamp = json.loads(line)
+        found[number] = (index, source, stamp)
+    if sorted(found) != list(range(len(tasks))) or not all(os.path.exists(e[0]) for e in found.values()):
+        return      # another compiler still works (it writes the record when it ends), or a task failed
     record = {"kernels": str(Path(kernels).resolve()), "python": list(sys.version_info[:2]),
-              "numba": numba.__version__, "entries": entries}
+              "numba": numba.__version__, "entries": [found[n] for n in range(len(tasks))]}
     tmp = folder / f"{MANIFEST}.{os.getpid()}"
     tmp.write_text(json.dumps(record))
     os.replace(tmp, folder / MANIFEST)

@@ -96,6 +96,27 @@ _TINY = [{"module": "fr_tiny_kernels", "function": "add", "cpu_s": 0.1, "calls":
           "cpu_s": 0.1, "calls": [0], "stage": "b"}]
 
 
+def test_kernel_modules_import_in_a_compiler():
+    """
+    The shipped list's modules import in a new compiler process, whose packages are stubs
+    (`precompile._StubPackages`: no package ``__init__``), and without sunpy.  Failing: a kernel
+    module needs a name of its package's ``__init__`` (a first run would compile it itself), or
+    imports sunpy (a compiler's second of CPU).
+    """
+    import subprocess
+    from pathlib import Path
+
+    code = precompile._STUBS + (
+        "import importlib\n"
+        "for task in precompile.load_kernels(sys.argv[2]):\n"
+        "    getattr(importlib.import_module(task['module']), task['function'])\n"
+        "print(sorted(name for name in sys.modules if name.split('.')[0] == 'sunpy'))\n")
+    done = subprocess.run([sys.executable, "-c", code, str(Path(precompile.__file__).parent),
+                           str(precompile.KERNELS)], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "[]"
+
+
 @pytest.mark.parametrize("fork", [True, False])
 def test_background_compile(cache, tmp_path, fork):
     """

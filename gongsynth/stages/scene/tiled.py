@@ -25,13 +25,13 @@ B_LOS is placed exactly like the light.
 import math
 
 import astropy.units as u
-import numba
 import numpy as np
 import scipy.sparse
 
 from gongsynth import instruments
 from gongsynth.geometry import Pointing, wcs_header
 from gongsynth.stages.channels import CHANNEL_UNIT
+from gongsynth.stages.scene._rows import sparse_rows
 from gongsynth.stages.scene.scene import DeferredStack, Scene, radiance_at_earth, sky_grid
 from gongsynth.threads import run_chunks
 from gongsynth.validation import check_finite, check_quantity
@@ -91,27 +91,6 @@ def _quadrants(shape, resolutions, detector_shape):
     return [(r, c, m) for (r, c), m in zip(spans, resolutions)]
 
 
-@numba.njit(inline="always", cache=True)
-def _sparse_row(indptr, indices, weights, first, narrow, out, r, row):
-    """``out[r] = Σ_k weights[k] narrow[indices[k]]`` over CSR row ``first + r`` (sums in ``row``)."""
-    row[:] = 0.0
-    for k in range(indptr[first + r], indptr[first + r + 1]):
-        w = weights[k]
-        src = narrow[indices[k]]
-        for c in range(out.shape[1]):
-            row[c] += w * src[c]
-    for c in range(out.shape[1]):
-        out[r, c] = row[c]
-
-
-@numba.njit(cache=True, nogil=True)
-def _sparse_rows(start, stop, indptr, indices, weights, first, narrow, out):
-    """`_sparse_row` for rows ``start`` to ``stop`` of ``out`` (`~gongsynth.threads.run_chunks`)."""
-    row = np.empty(out.shape[1])
-    for r in range(start, stop):
-        _sparse_row(indptr, indices, weights, first, narrow, out, r, row)
-
-
 # Fewest rows per thread: below, the threads' start and join (and, on a loaded machine, their
 # waiting for each other) cost more than the work (the optics' blocks of rows stay on one thread).
 _THREAD_ROWS = 512
@@ -157,7 +136,7 @@ class _Tiler:
         for (rows, cols, opy, _), narrow in zip(self.regions, self._narrow_of(i)):
             lo, hi = max(start, rows.start), min(stop, rows.stop)
             if lo < hi:
-                run_chunks(_sparse_rows, hi - lo, opy.indptr, opy.indices, opy.data, lo - rows.start, narrow,
+                run_chunks(sparse_rows, hi - lo, opy.indptr, opy.indices, opy.data, lo - rows.start, narrow,
                            out[lo - start:hi - start, cols], min_chunk=_THREAD_ROWS)
         return out
 

@@ -38,12 +38,12 @@ import inspect
 import math
 
 import astropy.units as u
-import numba as nb
 import numpy as np
 
 from gongsynth.seeding import as_seed_sequence, stage_generator
 from gongsynth.sun.model_atmosphere import flux_elements as fe
 from gongsynth.sun.model_atmosphere import stratification as st
+from gongsynth.sun.model_atmosphere._rows import blend_rows, flow_rows, internetwork_rows
 from gongsynth.sun.model_atmosphere.granulation import PeriodicGrid, anelastic_profile, granulation_pattern
 from gongsynth.sun.model_atmosphere.network_layout import network_layout
 from gongsynth.sun.model_atmosphere.sunspot import spot_structure
@@ -141,57 +141,6 @@ def reference_stratifications(z_grid, granulation="brc", amplitude=1.0, element_
     return out
 
 
-@nb.njit(cache=True, nogil=True)
-def _blend(start, stop, a, f, su, sp, a0, da, q_t, q_p, tube_t, tube_p, u_t, u_p, p_t, p_p, temp, pres):
-    """T and P per (height, column) of rows ``start`` to ``stop``: area-weighted means of the components."""
-    na, nz = q_t.shape
-    nx = a.shape[1]
-    for j in range(start, stop):
-        m = np.empty(nx, dtype=np.int64)
-        w = np.empty(nx)
-        q = np.empty(nx)
-        for i in range(nx):
-            x = min(max((a[j, i] - a0) / da, 0.0), na - 1.000001)
-            m[i] = int(x)
-            w[i] = x - m[i]
-            q[i] = max(1.0 - f[j, i] - su[j, i] - sp[j, i], 0.0)
-        for k in range(nz):
-            for i in range(nx):
-                mi, wi = m[i], w[i]
-                tq = (1 - wi) * q_t[mi, k] + wi * q_t[mi + 1, k]
-                pq = (1 - wi) * q_p[mi, k] + wi * q_p[mi + 1, k]
-                temp[k, j, i] = q[i] * tq + f[j, i] * tube_t[k] + su[j, i] * u_t[k] + sp[j, i] * p_t[k]
-                pres[k, j, i] = q[i] * pq + f[j, i] * tube_p[k] + su[j, i] * u_p[k] + sp[j, i] * p_p[k]
-
-
-@nb.njit(cache=True, nogil=True)
-def _flow(start, stop, h, s, fl, vz0, gx, gy, svx, svy, vel):
-    """v_z = h V, v_h = s ∇φ + (Evershed, moat) × their height profile, rows ``start`` to ``stop``."""
-    nz = h.size
-    nx = vz0.shape[1]
-    for j in range(start, stop):
-        for k in range(nz):
-            for i in range(nx):
-                vel[0, k, j, i] = s[k] * gx[j, i] + fl[k] * svx[j, i]
-                vel[1, k, j, i] = s[k] * gy[j, i] + fl[k] * svy[j, i]
-                vel[2, k, j, i] = h[k] * vz0[j, i]
-
-
-@nb.njit(cache=True, nogil=True)
-def _add_internetwork(start, stop, c, dc, ax, ay, dazdx, dazdy, curl, mag):
-    """B += curl of A c(z) in rows ``start`` to ``stop`` (`~gongsynth.sun.model_atmosphere.flux_elements`)."""
-    nz = c.size
-    nx = ax.shape[1]
-    for j in range(start, stop):
-        for k in range(nz):
-            for i in range(nx):
-                mag[0, k, j, i] += c[k] * dazdy[j, i] - dc[k] * ay[j, i]
-                mag[1, k, j, i] += dc[k] * ax[j, i] - c[k] * dazdx[j, i]
-                mag[2, k, j, i] += c[k] * curl[j, i]
-
-
-
-
 def assemble_rows(plan, rows, magnetic_field=None):
     """
     The 3-D fields of some rows from `model_sun`'s plan (the same bits as those rows of the whole box).
@@ -217,15 +166,15 @@ def assemble_rows(plan, rows, magnetic_field=None):
     pick = (lambda plane: plane) if whole else (lambda plane: np.ascontiguousarray(plane[rows]))
     temp = np.empty((nz, nr, nx), dtype=np.float32)
     pres = np.empty_like(temp)
-    run_chunks(_blend, nr, *(pick(p_) for p_ in plan["blend"]), *plan["blend_tables"], temp, pres)
+    run_chunks(blend_rows, nr, *(pick(p_) for p_ in plan["blend"]), *plan["blend_tables"], temp, pres)
     if magnetic_field is None:
         return temp, pres, None
     vel = np.empty((3,) + temp.shape, dtype=np.float32)
     h, s, flows = plan["flow_profiles"]
-    run_chunks(_flow, nr, h, s, flows, *(pick(p_) for p_ in plan["flow"]), vel)
+    run_chunks(flow_rows, nr, h, s, flows, *(pick(p_) for p_ in plan["flow"]), vel)
     if plan["base_field"] is not None:
         magnetic_field[2] += pick(plan["base_field"]).astype(np.float32)
-    run_chunks(_add_internetwork, nr, *plan["internetwork_profiles"],
+    run_chunks(internetwork_rows, nr, *plan["internetwork_profiles"],
                *(pick(p_) for p_ in plan["internetwork"]), magnetic_field)
     return temp, pres, vel
 

@@ -46,6 +46,8 @@ import math
 import numba as nb
 import numpy as np
 
+from gongsynth.sun.rt.core_depth import LIGHT_CM_PER_S as _C
+from gongsynth.sun.rt.core_depth import ZEEMAN_CM_PER_G, core_depth_rays, point_parameters
 from gongsynth.sun.rt.voigt import (
     TABLE_YMAX,
     faddeeva,
@@ -67,9 +69,6 @@ TAU_BOTTOM = 60.0
 TAU_TOP = 1e-6
 #: Zeeman splitting (Doppler widths) up to which the σ profiles come from the Taylor series about π's.
 VB_TAYLOR = 0.1
-#: e / (4π m_e c²), cm⁻¹ G⁻¹: Δλ_B = this × λ² g B.
-ZEEMAN_CM_PER_G = 4.66864e-5
-_C = 2.99792458e10
 #: Fast-math flags of the fast solver: only fused multiply-add (no reassociation, NaN and inf kept), so the
 #: result is the same for any block size and thread count.
 _CONTRACT = {"contract"}
@@ -268,23 +267,6 @@ def _reference_rays(start, stop, lam_cm, lam0, lande_g, core_index, ds, kc_all, 
                     en = ec
 
 
-@nb.njit(cache=True)
-def _fast_elements(v, a, vb, kc, h, c1, c2, cq, cu, cv):
-    """(η_I, η_Q,U,V/η_I, ρ_Q,U,V/η_I) at one point; h = κ_L/2, c1,2 = 1 ∓ cos²γ, cv = cos γ."""
-    hp, fp = faddeeva_fast(v, a)
-    if vb == 0.0:
-        return kc + h * (hp * c1 + hp * c2), 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    hb, fb = faddeeva_fast(v + vb, a)
-    hr, fr = faddeeva_fast(v - vb, a)
-    hs = 0.5 * (hb + hr)
-    fs = 0.5 * (fb + fr)
-    ei = kc + h * (hp * c1 + hs * c2)
-    g = h / ei
-    t = g * (hp - hs)
-    r = g * (fp - fs)
-    return ei, t * cq, t * cu, g * (hr - hb) * cv, r * cq, r * cu, g * (fr - fb) * cv
-
-
 @nb.njit(cache=True, error_model="numpy", fastmath=_CONTRACT)
 def _w_vec(dl, rd, shift, y, xs, wr, wi):
     """
@@ -443,15 +425,17 @@ def solve_columns(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all
     """
     if not np.all(np.diff(lam_cm) > 0):
         raise ValueError("lam_cm must be strictly increasing")
-    run_chunks(_solve_rays, kc_all.shape[0], lam_cm - lam0, lam0, lande_g, core_index, ds, kc_all, kl_all,
-               dop_all, damp_all, src_all, vlos, bpar, b1, b2, out_i, out_q, out_u, out_v, log_tau_c,
-               log_tau_core)
+    dl = lam_cm - lam0
+    run_chunks(_solve_rays, kc_all.shape[0], dl, lam0, lande_g, ds, kc_all, kl_all, dop_all, damp_all,
+               src_all, vlos, bpar, b1, b2, out_i, out_q, out_u, out_v, log_tau_c)
+    if core_index >= 0:
+        run_chunks(core_depth_rays, kc_all.shape[0], dl, lam0, lande_g, core_index, ds, kc_all, kl_all,
+                   dop_all, damp_all, vlos, bpar, b1, b2, log_tau_core)
 
 
 @nb.njit(cache=True, nogil=True, error_model="numpy", fastmath=_CONTRACT)
-def _solve_rays(start, stop, dl, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all, damp_all, src_all,
-                vlos_all, bpar_all, b1_all, b2_all, out_i, out_q, out_u, out_v, log_tau_c_all,
-                log_tau_core_all):
+def _solve_rays(start, stop, dl, lam0, lande_g, ds, kc_all, kl_all, dop_all, damp_all, src_all,
+                vlos_all, bpar_all, b1_all, b2_all, out_i, out_q, out_u, out_v, log_tau_c_all):
     """
     Rays ``start`` to ``stop`` of `solve_columns` (``dl`` = λ − λ₀), one after the other.
 
@@ -463,7 +447,7 @@ def _solve_rays(start, stop, dl, lam0, lande_g, core_index, ds, kc_all, kl_all, 
     for p in range(start, stop):
         kc, kl, dop_k, aa, bb = kc_all[p], kl_all[p], dop_all[p], damp_all[p], src_all[p]
         vlos, bpar, b1, b2 = vlos_all[p], bpar_all[p], b1_all[p], b2_all[p]
-        log_tau_c, log_tau_core = log_tau_c_all[p], log_tau_core_all[p]
+        log_tau_c = log_tau_c_all[p]
         tc = 0.0
         tm = 0.0
         log_tau_c[nz - 1] = -12.0
@@ -479,29 +463,9 @@ def _solve_rays(start, stop, dl, lam0, lande_g, core_index, ds, kc_all, kl_all, 
                 kbot = k
         kbot = max(kbot - 1, 0)
         ktop = max(ktop, kbot + 1)
-        # The points' parameters, only where they are used: the integrated points (and all for the core's τ).
-        lo, hi = (0, nz) if core_index >= 0 else (kbot, ktop + 1)
-        pt = np.zeros((9, nz))        # 1/Δλ_D, v_los, v_B, κ_L/2, 1 - cos²γ, 1 + cos²γ, cos 2χ, sin 2χ, cos γ
-        polar = False
-        for k in range(lo, hi):
-            dop = dop_k[k]
-            pt[0, k] = 1.0 / dop
-            pt[1, k] = lam0 * vlos[k] / _C / dop
-            pt[3, k] = 0.5 * kl[k]
-            bz, bx, by = bpar[k], b1[k], b2[k]
-            b2sum = bz * bz + bx * bx + by * by
-            cg = 1.0
-            if b2sum > 0.0:
-                polar |= kbot <= k <= ktop
-                bb_ = math.sqrt(b2sum)
-                rb2 = 1.0 / b2sum
-                pt[2, k] = ZEEMAN_CM_PER_G * lam0 * lam0 * lande_g * bb_ / dop
-                cg = bz / bb_
-                pt[6, k] = (bx * bx - by * by) * rb2
-                pt[7, k] = 2.0 * bx * by * rb2
-            pt[4, k] = 1.0 - cg * cg
-            pt[5, k] = 1.0 + cg * cg
-            pt[8, k] = cg
+        # The points' parameters, only where they are used: the integrated points.
+        pt = np.zeros((9, nz))
+        polar = point_parameters(kbot, ktop + 1, lam0, lande_g, dop_k, vlos, kl, bpar, b1, b2, pt)
         wk = np.zeros((9, nl))
         pr0, pr1, pr2, pr3, pr4, pr5, xs, wbr, wbi = (wk[0], wk[1], wk[2], wk[3], wk[4], wk[5], wk[6], wk[7],
                                                       wk[8])
@@ -582,18 +546,3 @@ def _solve_rays(start, stop, dl, lam0, lande_g, core_index, ds, kc_all, kl_all, 
             out_q[p, j] = i1[j]
             out_u[p, j] = i2[j]
             out_v[p, j] = i3[j]
-        if core_index < 0:
-            continue
-        # Optical depth at the core wavelength along the whole ray.
-        j = core_index
-        tau = 0.0
-        log_tau_core[nz - 1] = -12.0
-        k = nz - 1
-        en0 = _fast_elements(dl[j] * pt[0, k] - pt[1, k], aa[k], pt[2, k], kc[k], pt[3, k], pt[4, k],
-                             pt[5, k], pt[6, k], pt[7, k], pt[8, k])[0]
-        for k in range(nz - 2, -1, -1):
-            ec0 = _fast_elements(dl[j] * pt[0, k] - pt[1, k], aa[k], pt[2, k], kc[k], pt[3, k], pt[4, k],
-                                 pt[5, k], pt[6, k], pt[7, k], pt[8, k])[0]
-            tau += 0.5 * (ec0 + en0) * ds[k]
-            log_tau_core[k] = math.log10(max(tau, 1e-12))
-            en0 = ec0
