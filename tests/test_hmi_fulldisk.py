@@ -155,3 +155,43 @@ def test_reduced_basis_keeps_every_filtergram_within_its_bound(hmi_library):
     assert 0 < rel.max() < 2 * (bound + 1e-6)      # a line filtergram is ≥ half its continuum's here
     with pytest.raises(ValueError, match="basis_tolerance"):
         library_scene(lib, basis_tolerance="fast", **args)
+
+
+def test_truth_comes_with_the_light_bands(hmi_library, monkeypatch):
+    """A light made by bands writes its truth in the same passes (issue 26, hmi27): the truth read after
+    the light, or before it (a pass of its own), has the bits of the whole render's, and the counts
+    from the sight lines alone are the whole render's: samples on the disk, velocities off the table."""
+    import dataclasses
+    import warnings
+
+    from gongsynth.stages.scene.scene import DeferredStack
+    inst = HMI.replace(plate_scale=40 * u.arcsec)
+    args = dict(instrument=inst, detector_shape=48, supersampling=2, seed=3)
+    real = disk_render.large_scale_grid
+
+    def fast(*a, **k):      # velocities beyond the basis' table in part of the disk
+        large = real(*a, **k)
+        return dataclasses.replace(large, velocity=large.velocity * 20 + 3000 * np.sign(large.velocity))
+
+    for grid in (real, fast):
+        monkeypatch.setattr(disk_render, "large_scale_grid", grid)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            light, truth = library_scene(hmi_library, **args)
+        with monkeypatch.context() as m:
+            m.setattr(disk_render, "LIGHT_BYTES", 5 * 96 * 96 * 4)
+            with warnings.catch_warnings(record=True) as caught_bands:
+                warnings.simplefilter("always")
+                banded, banded_truth = library_scene(hmi_library, **args)
+                early, early_truth = library_scene(hmi_library, **args)
+        assert isinstance(banded_truth.planes, DeferredStack) and banded.planes.has_bands
+        assert [str(w.message) for w in caught_bands] == 2 * [str(w.message) for w in caught]
+        assert banded.meta["on_disk_samples"] == light.meta["on_disk_samples"] > 0
+        # after the light's bands (as the optics read them), then before any light
+        band = banded.planes.band(0, 50), banded.planes.band(50, 96)
+        np.testing.assert_array_equal(np.concatenate(band, axis=1), light.data.value)
+        np.testing.assert_array_equal(np.asarray(banded_truth.planes.plane()[0:96]), truth.data.value)
+        np.testing.assert_array_equal(early_truth.planes.plane()[30:60], truth.data.value[30:60])
+        np.testing.assert_array_equal(early_truth.data.value, truth.data.value)
+        np.testing.assert_array_equal(early.blos.value, truth.data.value)
+    assert "clamped" in str(caught[0].message)
