@@ -195,3 +195,63 @@ def test_truth_comes_with_the_light_bands(hmi_library, monkeypatch):
         np.testing.assert_array_equal(early_truth.data.value, truth.data.value)
         np.testing.assert_array_equal(early.blos.value, truth.data.value)
     assert "clamped" in str(caught[0].message)
+
+
+def test_reduced_rows_are_kept_with_the_cached_library(tmp_path, monkeypatch):
+    """The render's reduced rows (issue 26, hmi27) are computed once per cached library and read back
+    with the same bits; another tolerance or reducing code is another copy, a damaged copy is made again,
+    and a library outside the cache is reduced every time."""
+    import warnings
+    from pathlib import Path
+    from types import SimpleNamespace
+
+    from gongsynth.stages.scene import library as library_module
+    from gongsynth.stages.scene.library import CacheWarning, cached_library, derived_arrays
+    monkeypatch.setenv("GONGSYNTH_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(library_module, "_MEMO", {})
+    calls = []
+    reduce = disk_render._reduced_rows
+
+    def counted(*args):
+        calls.append(args[1])
+        return reduce(*args)
+
+    monkeypatch.setattr(disk_render, "_reduced_rows", counted)
+    built = cached_library(instrument=HMI, seed=5, **TINY)
+    assert "cache" in built.meta                       # a fresh build is in the cache at once
+    first = disk_render.render_rows(built, 1e-3)
+    monkeypatch.setattr(library_module, "_MEMO", {})
+    loaded = cached_library(instrument=HMI, seed=5, **TINY)
+    assert loaded is not built
+    again = disk_render.render_rows(loaded, 1e-3)
+    assert calls == [1e-3]                             # read back, not computed
+    for a, b in zip(first, again):
+        np.testing.assert_array_equal(a, b)
+    assert first[3] > 0 and first[2].shape[-1] < built.rank
+    disk_render.render_rows(loaded, 2e-3)
+    assert calls == [1e-3, 2e-3]
+    # the reducing code is in the key: an edit of the basis' module is another copy
+    edited = tmp_path / "shifts.py"
+    edited.write_bytes(Path(disk_render.shifts.__file__).read_bytes() + b"# edited\n")
+    with monkeypatch.context() as m:
+        m.setattr(disk_render, "shifts", SimpleNamespace(__file__=str(edited)))
+        disk_render.render_rows(loaded, 1e-3)
+    assert calls == [1e-3, 2e-3, 1e-3]
+    assert derived_arrays(loaded, "other", lambda: {"x": np.zeros(1)}, ["key"])["x"].shape == (1,)
+    # a damaged copy: a warning, computed again and replaced
+    for copy in Path(loaded.meta["cache"]).glob("render-rows-*"):
+        if (copy / "patches.npy").exists():
+            data = bytearray((copy / "patches.npy").read_bytes())
+            data[-1] ^= 1
+            (copy / "patches.npy").write_bytes(bytes(data))
+    with pytest.warns(CacheWarning, match="damaged"):
+        fixed = disk_render.render_rows(loaded, 1e-3)
+    np.testing.assert_array_equal(fixed[0], first[0])
+    assert calls == [1e-3, 2e-3, 1e-3, 1e-3]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        disk_render.render_rows(loaded, 1e-3)
+    assert len(calls) == 4
+    # outside the cache (built here): reduced every time
+    disk_render.render_rows(build_library(instrument=HMI, **TINY), 1e-3)
+    assert len(calls) == 5

@@ -12,7 +12,9 @@ renderer (`~gongsynth.stages.scene.scene.DeferredStack` s), and its counts (samp
 velocities beyond the basis' table) from the sight lines alone (`disk_counts`).
 """
 import mmap
+import sys
 import warnings
+from pathlib import Path
 
 import astropy.units as u
 import numpy as np
@@ -20,7 +22,9 @@ import numpy as np
 from gongsynth.geometry import as_obstime, pointing_centre, pointing_offset, wcs_header
 from gongsynth.seeding import as_seed_sequence
 from gongsynth.stages.channels import CHANNEL_UNIT
+from gongsynth.stages.scene import shifts
 from gongsynth.stages.scene.disk_kernel import cell_table, disk_counts, render_disk
+from gongsynth.stages.scene.library import derived_arrays
 from gongsynth.stages.scene.scene import DeferredStack, Scene, radiance_at_earth, sky_grid
 from gongsynth.stages.scene.shifts import reduced_basis
 from gongsynth.stages.scene.surface import large_scale_grid
@@ -142,7 +146,9 @@ def render_rows(library, tolerance=None):
     every filtergram of every stored row, at every tabulated velocity, stays within ``tolerance`` of
     the filtergram of its continuum; a sample mixes rows with positive weights and scales them alike
     (limb darkening), so its error obeys the same bound.  Each E and V part of a row is replaced by
-    its continuum and its r new coordinates; B_z and B_x are kept.
+    its continuum and its r new coordinates; B_z and B_x are kept.  The reduced rows of a cached
+    library are kept in its cache entry (`~gongsynth.stages.scene.library.derived_arrays`, keyed by
+    the tolerance and the source of the code that reduces them): computed once, read back after.
 
     Parameters
     ----------
@@ -159,9 +165,19 @@ def render_rows(library, tolerance=None):
     bound : float
         The bound on the filtergrams' relative error (0 for the stored basis).
     """
-    basis = library.basis
     if tolerance is None:
-        return np.asarray(library.patches), np.asarray(library.uniform), basis.amplitudes, 0.0
+        return np.asarray(library.patches), np.asarray(library.uniform), library.basis.amplitudes, 0.0
+    # Kept with a cached library: its key, the tolerance and the code that reduces (this module's and
+    # the basis') name them.
+    key = [repr(float(tolerance)), np.__version__] + [Path(module.__file__).read_bytes()
+                                                       for module in (sys.modules[__name__], shifts)]
+    rows = derived_arrays(library, "render-rows", lambda: _reduced_rows(library, tolerance), key)
+    return rows["patches"], rows["uniform"], rows["amplitudes"], float(rows["bound"])
+
+
+def _reduced_rows(library, tolerance):
+    """`render_rows` with a tolerance, computed: a dict of patches, uniform, amplitudes and bound."""
+    basis = library.basis
     j1 = basis.rank + 1
     lay = library.layout()
     parts = lay["e"] + [lay["v"]]
@@ -174,7 +190,8 @@ def render_rows(library, tolerance=None):
 
     transform, amplitudes, bound = reduced_basis(basis, spectra, tolerance)
     if transform is None:
-        return np.asarray(library.patches), np.asarray(library.uniform), basis.amplitudes, 0.0
+        return dict(patches=np.asarray(library.patches), uniform=np.asarray(library.uniform),
+                    amplitudes=basis.amplitudes, bound=np.float64(0.0))
     r1 = transform.shape[0] + 1
     # The stored E and V parts (continuum, J coordinates) to (continuum, r coordinates).
     block = np.zeros((j1, r1))
@@ -190,7 +207,7 @@ def render_rows(library, tolerance=None):
                 rows[start:start + chunk.shape[0], i * r1:(i + 1) * r1] = chunk[:, offset:offset + j1] @ block
             rows[start:start + chunk.shape[0], -2:] = chunk[:, lay["bz"]:lay["bx"] + 1]
         out.append(rows.reshape(array.shape[:-1] + (rows.shape[1],)))
-    return out[0], out[1], amplitudes, bound
+    return dict(patches=out[0], uniform=out[1], amplitudes=amplitudes, bound=np.float64(bound))
 
 
 def library_scene(library, *, obstime=None, instrument=None, detector_shape=None, supersampling=None,

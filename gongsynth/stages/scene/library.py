@@ -63,7 +63,7 @@ from gongsynth.sun.photosphere import (
 from gongsynth.version import version
 
 __all__ = ["LEVELS", "STRONG_FIELDS", "DEFAULT_THETA", "LIBRARY_SEED", "PatchLibrary", "build_library",
-           "cached_library", "cache_directory", "CacheWarning"]
+           "cached_library", "cache_directory", "CacheWarning", "derived_arrays"]
 
 #: The patch levels: name and the `model_photosphere` knobs that set them (no
 #: sunspot, no plage patches: the flux sits in network elements of
@@ -432,11 +432,11 @@ def _warn(message):
     warnings.warn(message, CacheWarning, stacklevel=3)
 
 
-def _clean_stale(parent):
+def _clean_stale(parent, pattern="library-*.tmp-*"):
     """Remove the temporary folders of killed saves (another process's live one is left alone)."""
     import time
 
-    for tmp in parent.glob("library-*.tmp-*"):
+    for tmp in parent.glob(pattern):
         try:
             age = time.time() - tmp.stat().st_mtime
             pid = int(tmp.name.split(".tmp-")[1].split("-")[0])
@@ -589,6 +589,83 @@ def cached_library(*, sun="milne-eddington", progress=False, **arguments):
         library = build()
         if folder is not None:
             _save(library, folder)
+            if folder in _VERIFIED:     # written: what is derived from it is kept beside it too
+                library = dataclasses.replace(library, meta={**library.meta, "cache": str(folder)})
     _MEMO.clear()      # keep one: a library is ~300 MB
     _MEMO[key] = library
     return library
+
+
+def derived_arrays(library, name, compute, key):
+    """
+    Arrays derived from a library, computed once and kept in its cache entry (`cached_library`).
+
+    An entry's folder is named by the library's key (its arguments, gongsynth's version and the
+    source of every module that shapes its numbers) and is removed with the entry, so what is kept in
+    it belongs to that library alone; ``key`` names everything else the arrays depend on (parameters,
+    the source of the code that computes them), so that a change of either computes them again.  The
+    files are written atomically with their SHA-256, checked when read: a damaged or unwritable copy
+    is computed again (a `CacheWarning`).  A library not in the cache is computed every time.
+
+    Parameters
+    ----------
+    library : `PatchLibrary`
+    name : str
+        What the arrays are (a folder name's prefix).
+    compute : callable
+        ``compute()`` → dict of `numpy.ndarray` (float or int).
+    key : iterable of str or bytes
+        What else the arrays depend on.
+
+    Returns
+    -------
+    dict
+        The arrays (read back from the cache, or just computed).
+
+    Examples
+    --------
+    >>> import astropy.units as u, numpy as np
+    >>> lib = build_library(shape=(16, 16), pixel_size=6 * u.Mm, seeds_per_level=(1, 1, 1, 1), theta=(0, 60))
+    >>> derived_arrays(lib, "mean", lambda: {"mean": lib.patches.mean(axis=(1, 2))}, ["v1"])["mean"].shape
+    (4, 2, 62)
+    """
+    cache = library.meta.get("cache")
+    if cache is None:
+        return compute()
+    digest = hashlib.sha256()
+    for part in key:
+        digest.update(part if isinstance(part, bytes) else str(part).encode())
+        digest.update(b"\0")
+    folder = Path(cache) / f"{name}-{digest.hexdigest()[:24]}"
+    if (folder / "arrays.json").is_file():
+        try:
+            sums = json.loads((folder / "arrays.json").read_text())["sha256"]
+            arrays = {}
+            for file, checksum in sums.items():
+                if fingerprint(folder / file) != checksum:
+                    raise ValueError(f"{file} does not match its checksum")
+                arrays[file[:-4]] = np.load(folder / file)
+            return arrays
+        except (OSError, ValueError, KeyError, TypeError) as exc:
+            _warn(f"the cached {name} arrays in {folder} are damaged ({exc}); they are computed again")
+    arrays = compute()
+    tmp = None
+    try:
+        _clean_stale(folder.parent, f"{name}-*.tmp-*")
+        tmp = Path(tempfile.mkdtemp(prefix=f"{folder.name}.tmp-{os.getpid()}-", dir=folder.parent))
+        for key_name, array in arrays.items():
+            np.save(tmp / f"{key_name}.npy", np.asarray(array))
+        (tmp / "arrays.json").write_text(json.dumps(
+            {"sha256": {p.name: fingerprint(p) for p in sorted(tmp.glob("*.npy"))}}))
+        if folder.exists():   # a damaged copy: moved aside, then removed
+            old = Path(tempfile.mkdtemp(prefix=f"{folder.name}.tmp-{os.getpid()}-", dir=folder.parent))
+            folder.rename(old / "entry")
+            shutil.rmtree(old, ignore_errors=True)
+        tmp.rename(folder)
+    except OSError as exc:
+        if tmp is not None:
+            shutil.rmtree(tmp, ignore_errors=True)
+        if not (folder / "arrays.json").is_file():   # not another process's copy that won the race
+            _warn(f"could not keep the {name} arrays in the cache {folder.parent} ({exc.strerror or exc}); "
+                  f"they are computed again next time")
+    return arrays
