@@ -627,7 +627,7 @@ def derived_arrays(library, name, compute, key):
     >>> import astropy.units as u, numpy as np
     >>> lib = build_library(shape=(16, 16), pixel_size=6 * u.Mm, seeds_per_level=(1, 1, 1, 1), theta=(0, 60))
     >>> derived_arrays(lib, "mean", lambda: {"mean": lib.patches.mean(axis=(1, 2))}, ["v1"])["mean"].shape
-    (4, 2, 62)
+    (4, 2, 24)
     """
     cache = library.meta.get("cache")
     if cache is None:
