@@ -206,7 +206,8 @@ def test_reduced_rows_are_kept_with_the_cached_library(tmp_path, monkeypatch):
     from types import SimpleNamespace
 
     from gongsynth.stages.scene import library as library_module
-    from gongsynth.stages.scene.library import CacheWarning, cached_library, derived_arrays
+    from gongsynth.stages.scene.library import cached_library
+    from gongsynth.stages.scene.library_store import CacheWarning, derived_arrays
     monkeypatch.setenv("GONGSYNTH_CACHE_DIR", str(tmp_path))
     monkeypatch.setattr(library_module, "_MEMO", {})
     calls = []

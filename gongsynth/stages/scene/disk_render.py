@@ -24,7 +24,7 @@ from gongsynth.seeding import as_seed_sequence
 from gongsynth.stages.channels import CHANNEL_UNIT
 from gongsynth.stages.scene import shifts
 from gongsynth.stages.scene.disk_kernel import cell_table, disk_counts, render_disk
-from gongsynth.stages.scene.library import derived_arrays
+from gongsynth.stages.scene.library_store import derived_arrays
 from gongsynth.stages.scene.scene import DeferredStack, Scene, radiance_at_earth, sky_grid
 from gongsynth.stages.scene.shifts import reduced_basis
 from gongsynth.stages.scene.surface import large_scale_grid
@@ -147,7 +147,7 @@ def render_rows(library, tolerance=None):
     the filtergram of its continuum; a sample mixes rows with positive weights and scales them alike
     (limb darkening), so its error obeys the same bound.  Each E and V part of a row is replaced by
     its continuum and its r new coordinates; B_z and B_x are kept.  The reduced rows of a cached
-    library are kept in its cache entry (`~gongsynth.stages.scene.library.derived_arrays`, keyed by
+    library are kept in its cache entry (`~gongsynth.stages.scene.library_store.derived_arrays`, keyed by
     the tolerance and the source of the code that reduces them): computed once, read back after.
 
     Parameters

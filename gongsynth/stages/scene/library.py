@@ -39,9 +39,7 @@ import dataclasses
 import hashlib
 import json
 import os
-import shutil
 import sys
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -52,6 +50,9 @@ from gongsynth import instruments
 from gongsynth.files import fingerprint
 from gongsynth.seeding import as_seed_sequence, child_sequence
 from gongsynth.stages.scene.library_layout import library_layout
+
+# CacheWarning: re-exported, the name callers have caught since the cache's first version.
+from gongsynth.stages.scene.library_store import CacheWarning, warn_cache, write_folder  # noqa: F401
 from gongsynth.stages.scene.shifts import ShiftBasis
 from gongsynth.sun.photosphere import (
     DeferredStokes,
@@ -63,7 +64,7 @@ from gongsynth.sun.photosphere import (
 from gongsynth.version import version
 
 __all__ = ["LEVELS", "STRONG_FIELDS", "DEFAULT_THETA", "LIBRARY_SEED", "PatchLibrary", "build_library",
-           "cached_library", "cache_directory", "CacheWarning", "derived_arrays"]
+           "cached_library", "cache_directory"]
 
 #: The patch levels: name and the `model_photosphere` knobs that set them (no
 #: sunspot, no plage patches: the flux sits in network elements of
@@ -416,53 +417,12 @@ def _key(arguments, sun):
     return digest.hexdigest()[:24]
 
 
-# Temporary folders of a save are "<entry>.tmp-<pid>-<random>"; one older than this whose process is gone
-# (or older than an hour: another machine's) was left by a killed save.
-_STALE_SECONDS = 60.0
 _VERIFIED = set()    # entries whose checksums this process has checked
-
-
-class CacheWarning(UserWarning):
-    """The library cache could not be used (unwritable, or a damaged entry): the run goes on without it."""
-
-
-def _warn(message):
-    import warnings
-
-    warnings.warn(message, CacheWarning, stacklevel=3)
-
-
-def _clean_stale(parent, pattern="library-*.tmp-*"):
-    """Remove the temporary folders of killed saves (another process's live one is left alone)."""
-    import time
-
-    for tmp in parent.glob(pattern):
-        try:
-            age = time.time() - tmp.stat().st_mtime
-            pid = int(tmp.name.split(".tmp-")[1].split("-")[0])
-        except (OSError, ValueError, IndexError):
-            continue
-        if age > 3600 or (age > _STALE_SECONDS and not _alive(pid)):
-            shutil.rmtree(tmp, ignore_errors=True)
-
-
-def _alive(pid):
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except OSError:     # exists, another user's
-        return True
-    return True
 
 
 def _save(library, folder):
     """Write an entry atomically (replacing a damaged one), each file's SHA-256 in library.json."""
-    tmp = None
-    try:
-        folder.parent.mkdir(parents=True, exist_ok=True)
-        _clean_stale(folder.parent)
-        tmp = Path(tempfile.mkdtemp(prefix=f"{folder.name}.tmp-{os.getpid()}-", dir=folder.parent))
+    def fill(tmp):
         for name in _ARRAYS:
             np.save(tmp / f"{name}.npy", getattr(library, name))
         for name in _BASIS:
@@ -473,19 +433,15 @@ def _save(library, folder):
                  "mirror_ok": library.mirror_ok, "basis_error": library.basis.error, "meta": library.meta,
                  "sha256": {p.name: fingerprint(p) for p in sorted(tmp.glob("*.npy"))}}
         (tmp / "library.json").write_text(json.dumps(small))
-        if folder.exists():   # a damaged entry: moved aside, then removed
-            old = Path(tempfile.mkdtemp(prefix=f"{folder.name}.tmp-{os.getpid()}-", dir=folder.parent))
-            folder.rename(old / "entry")
-            shutil.rmtree(old, ignore_errors=True)
-        tmp.rename(folder)
+
+    try:
+        write_folder(folder, fill, "library-*")
         _VERIFIED.add(folder)
     except OSError as exc:
-        if tmp is not None:
-            shutil.rmtree(tmp, ignore_errors=True)
         if not (folder / "library.json").is_file():   # not another process's entry that won the race
-            _warn(f"could not write the patch library to the cache {folder.parent} ({exc.strerror or exc}); "
-                  f"the run goes on with the library in memory (set GONGSYNTH_CACHE_DIR to a writable "
-                  f"folder, or to 'off' for no disk cache)")
+            warn_cache(f"could not write the patch library to the cache {folder.parent} "
+                       f"({exc.strerror or exc}); the run goes on with the library in memory (set "
+                       f"GONGSYNTH_CACHE_DIR to a writable folder, or to 'off' for no disk cache)")
 
 
 def _verify(folder, small):
@@ -583,7 +539,7 @@ def cached_library(*, sun="milne-eddington", progress=False, **arguments):
                 instruments.get(arguments.get("instrument")).line)
             library = _load(folder, rows_line)
         except (OSError, ValueError, KeyError, TypeError) as exc:
-            _warn(f"the cached patch library {folder} is damaged ({exc}); it is rebuilt and replaced")
+            warn_cache(f"the cached patch library {folder} is damaged ({exc}); it is rebuilt and replaced")
             library = None
     if library is None:
         library = build()
@@ -594,78 +550,3 @@ def cached_library(*, sun="milne-eddington", progress=False, **arguments):
     _MEMO.clear()      # keep one: a library is ~300 MB
     _MEMO[key] = library
     return library
-
-
-def derived_arrays(library, name, compute, key):
-    """
-    Arrays derived from a library, computed once and kept in its cache entry (`cached_library`).
-
-    An entry's folder is named by the library's key (its arguments, gongsynth's version and the
-    source of every module that shapes its numbers) and is removed with the entry, so what is kept in
-    it belongs to that library alone; ``key`` names everything else the arrays depend on (parameters,
-    the source of the code that computes them), so that a change of either computes them again.  The
-    files are written atomically with their SHA-256, checked when read: a damaged or unwritable copy
-    is computed again (a `CacheWarning`).  A library not in the cache is computed every time.
-
-    Parameters
-    ----------
-    library : `PatchLibrary`
-    name : str
-        What the arrays are (a folder name's prefix).
-    compute : callable
-        ``compute()`` → dict of `numpy.ndarray` (float or int).
-    key : iterable of str or bytes
-        What else the arrays depend on.
-
-    Returns
-    -------
-    dict
-        The arrays (read back from the cache, or just computed).
-
-    Examples
-    --------
-    >>> import astropy.units as u, numpy as np
-    >>> lib = build_library(shape=(16, 16), pixel_size=6 * u.Mm, seeds_per_level=(1, 1, 1, 1), theta=(0, 60))
-    >>> derived_arrays(lib, "mean", lambda: {"mean": lib.patches.mean(axis=(1, 2))}, ["v1"])["mean"].shape
-    (4, 2, 24)
-    """
-    cache = library.meta.get("cache")
-    if cache is None:
-        return compute()
-    digest = hashlib.sha256()
-    for part in key:
-        digest.update(part if isinstance(part, bytes) else str(part).encode())
-        digest.update(b"\0")
-    folder = Path(cache) / f"{name}-{digest.hexdigest()[:24]}"
-    if (folder / "arrays.json").is_file():
-        try:
-            sums = json.loads((folder / "arrays.json").read_text())["sha256"]
-            arrays = {}
-            for file, checksum in sums.items():
-                if fingerprint(folder / file) != checksum:
-                    raise ValueError(f"{file} does not match its checksum")
-                arrays[file[:-4]] = np.load(folder / file)
-            return arrays
-        except (OSError, ValueError, KeyError, TypeError) as exc:
-            _warn(f"the cached {name} arrays in {folder} are damaged ({exc}); they are computed again")
-    arrays = compute()
-    tmp = None
-    try:
-        _clean_stale(folder.parent, f"{name}-*.tmp-*")
-        tmp = Path(tempfile.mkdtemp(prefix=f"{folder.name}.tmp-{os.getpid()}-", dir=folder.parent))
-        for key_name, array in arrays.items():
-            np.save(tmp / f"{key_name}.npy", np.asarray(array))
-        (tmp / "arrays.json").write_text(json.dumps(
-            {"sha256": {p.name: fingerprint(p) for p in sorted(tmp.glob("*.npy"))}}))
-        if folder.exists():   # a damaged copy: moved aside, then removed
-            old = Path(tempfile.mkdtemp(prefix=f"{folder.name}.tmp-{os.getpid()}-", dir=folder.parent))
-            folder.rename(old / "entry")
-            shutil.rmtree(old, ignore_errors=True)
-        tmp.rename(folder)
-    except OSError as exc:
-        if tmp is not None:
-            shutil.rmtree(tmp, ignore_errors=True)
-        if not (folder / "arrays.json").is_file():   # not another process's copy that won the race
-            _warn(f"could not keep the {name} arrays in the cache {folder.parent} ({exc.strerror or exc}); "
-                  f"they are computed again next time")
-    return arrays
