@@ -172,11 +172,16 @@ def render_rows(library, tolerance=None):
     key = [repr(float(tolerance)), np.__version__] + [Path(module.__file__).read_bytes()
                                                        for module in (sys.modules[__name__], shifts)]
     rows = derived_arrays(library, "render-rows", lambda: _reduced_rows(library, tolerance), key)
+    if rows["patches"].size == 0:       # no lower rank within the tolerance: the stored rows
+        return np.asarray(library.patches), np.asarray(library.uniform), library.basis.amplitudes, 0.0
     return rows["patches"], rows["uniform"], rows["amplitudes"], float(rows["bound"])
 
 
 def _reduced_rows(library, tolerance):
-    """`render_rows` with a tolerance, computed: a dict of patches, uniform, amplitudes and bound."""
+    """
+    `render_rows` with a tolerance, computed: a dict of patches, uniform, amplitudes and bound (empty
+    rows where no lower rank is within the tolerance: the stored ones are not copied into the cache).
+    """
     basis = library.basis
     j1 = basis.rank + 1
     lay = library.layout()
@@ -190,7 +195,7 @@ def _reduced_rows(library, tolerance):
 
     transform, amplitudes, bound = reduced_basis(basis, spectra, tolerance)
     if transform is None:
-        return dict(patches=np.asarray(library.patches), uniform=np.asarray(library.uniform),
+        return dict(patches=np.zeros(0, np.float32), uniform=np.zeros(0, np.float32),
                     amplitudes=basis.amplitudes, bound=np.float64(0.0))
     r1 = transform.shape[0] + 1
     # The stored E and V parts (continuum, J coordinates) to (continuum, r coordinates).
