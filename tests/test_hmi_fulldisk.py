@@ -155,3 +155,114 @@ def test_reduced_basis_keeps_every_filtergram_within_its_bound(hmi_library):
     assert 0 < rel.max() < 2 * (bound + 1e-6)      # a line filtergram is ≥ half its continuum's here
     with pytest.raises(ValueError, match="basis_tolerance"):
         library_scene(lib, basis_tolerance="fast", **args)
+
+
+def test_truth_comes_with_the_light_bands(hmi_library, monkeypatch):
+    """A light made by bands writes its truth in the same passes (issue 26, hmi27): the truth read after
+    the light, or before it (a pass of its own), has the bits of the whole render's, and the counts
+    from the sight lines alone are the whole render's: samples on the disk, velocities off the table."""
+    import dataclasses
+    import warnings
+
+    from gongsynth.stages.scene.scene import DeferredStack
+    inst = HMI.replace(plate_scale=40 * u.arcsec)
+    args = dict(instrument=inst, detector_shape=48, supersampling=2, seed=3)
+    real = disk_render.large_scale_grid
+
+    def fast(*a, **k):      # velocities beyond the basis' table in part of the disk
+        large = real(*a, **k)
+        return dataclasses.replace(large, velocity=large.velocity * 20 + 3000 * np.sign(large.velocity))
+
+    for grid in (real, fast):
+        monkeypatch.setattr(disk_render, "large_scale_grid", grid)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            light, truth = library_scene(hmi_library, **args)
+        with monkeypatch.context() as m:
+            m.setattr(disk_render, "LIGHT_BYTES", 5 * 96 * 96 * 4)
+            with warnings.catch_warnings(record=True) as caught_bands:
+                warnings.simplefilter("always")
+                banded, banded_truth = library_scene(hmi_library, **args)
+                early, early_truth = library_scene(hmi_library, **args)
+        assert isinstance(banded_truth.planes, DeferredStack) and banded.planes.has_bands
+        assert [str(w.message) for w in caught_bands] == 2 * [str(w.message) for w in caught]
+        assert banded.meta["on_disk_samples"] == light.meta["on_disk_samples"] > 0
+        # after the light's bands (as the optics read them), then before any light
+        band = banded.planes.band(0, 50), banded.planes.band(50, 96)
+        np.testing.assert_array_equal(np.concatenate(band, axis=1), light.data.value)
+        np.testing.assert_array_equal(np.asarray(banded_truth.planes.plane()[0:96]), truth.data.value)
+        np.testing.assert_array_equal(early_truth.planes.plane()[30:60], truth.data.value[30:60])
+        np.testing.assert_array_equal(early_truth.data.value, truth.data.value)
+        np.testing.assert_array_equal(early.blos.value, truth.data.value)
+    assert "clamped" in str(caught[0].message)
+
+
+def test_reduced_rows_are_kept_with_the_cached_library(tmp_path, monkeypatch):
+    """The render's reduced rows (issue 26, hmi27) are computed once per cached library and read back
+    with the same bits; another tolerance or reducing code is another copy, a damaged copy is made again,
+    and a library outside the cache is reduced every time."""
+    import warnings
+    from pathlib import Path
+    from types import SimpleNamespace
+
+    from gongsynth.stages.scene import library as library_module
+    from gongsynth.stages.scene.library import cached_library
+    from gongsynth.stages.scene.library_store import CacheWarning, derived_arrays
+    monkeypatch.setenv("GONGSYNTH_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(library_module, "_MEMO", {})
+    calls = []
+    reduce = disk_render._reduced_rows
+
+    def counted(*args):
+        calls.append(args[1])
+        return reduce(*args)
+
+    monkeypatch.setattr(disk_render, "_reduced_rows", counted)
+    built = cached_library(instrument=HMI, seed=5, **TINY)
+    assert "cache" in built.meta                       # a fresh build is in the cache at once
+    first = disk_render.render_rows(built, 1e-3)
+    monkeypatch.setattr(library_module, "_MEMO", {})
+    loaded = cached_library(instrument=HMI, seed=5, **TINY)
+    assert loaded is not built
+    again = disk_render.render_rows(loaded, 1e-3)
+    assert calls == [1e-3]                             # read back, not computed
+    for a, b in zip(first, again):
+        np.testing.assert_array_equal(a, b)
+    assert first[3] > 0 and first[2].shape[-1] < built.rank
+    disk_render.render_rows(loaded, 2e-3)
+    assert calls == [1e-3, 2e-3]
+    # the reducing code is in the key: an edit of the basis' module is another copy
+    edited = tmp_path / "shifts.py"
+    edited.write_bytes(Path(disk_render.shifts.__file__).read_bytes() + b"# edited\n")
+    with monkeypatch.context() as m:
+        m.setattr(disk_render, "shifts", SimpleNamespace(__file__=str(edited)))
+        disk_render.render_rows(loaded, 1e-3)
+    assert calls == [1e-3, 2e-3, 1e-3]
+    assert derived_arrays(loaded, "other", lambda: {"x": np.zeros(1)}, ["key"])["x"].shape == (1,)
+    # a damaged copy: a warning, computed again and replaced
+    for copy in Path(loaded.meta["cache"]).glob("render-rows-*"):
+        if (copy / "patches.npy").exists():
+            data = bytearray((copy / "patches.npy").read_bytes())
+            data[-1] ^= 1
+            (copy / "patches.npy").write_bytes(bytes(data))
+    with pytest.warns(CacheWarning, match="damaged"):
+        fixed = disk_render.render_rows(loaded, 1e-3)
+    np.testing.assert_array_equal(fixed[0], first[0])
+    assert calls == [1e-3, 2e-3, 1e-3, 1e-3]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        disk_render.render_rows(loaded, 1e-3)
+    assert len(calls) == 4
+    # no lower rank within a tolerance: the stored rows, and nothing of them copied into the cache
+    with monkeypatch.context() as m:
+        m.setattr(disk_render, "reduced_basis", lambda basis, *_: (None, basis.amplitudes, 0.0))
+        stored = disk_render.render_rows(loaded, 5e-3)
+        assert stored[3] == 0
+        np.testing.assert_array_equal(stored[2], loaded.basis.amplitudes)
+        np.testing.assert_array_equal(stored[0], loaded.patches)
+        assert len(calls) == 5 and disk_render.render_rows(loaded, 5e-3)[3] == 0 and len(calls) == 5
+    assert min(np.load(p / "patches.npy").size for p in Path(loaded.meta["cache"]).glob("render-rows-*")
+               if (p / "patches.npy").exists()) == 0
+    # outside the cache (built here): reduced every time
+    disk_render.render_rows(build_library(instrument=HMI, **TINY), 1e-3)
+    assert len(calls) == 6

@@ -31,12 +31,15 @@ a plane less its mean (a constant passes unchanged through a unit-sum kernel
 with periodic or mirrored edges), so float32 round-off is relative to the
 contrast, not to the level.
 """
+from collections import deque
+from concurrent.futures import ThreadPoolExecutor
+
 import numpy as np
 import scipy.fft
 
 from gongsynth.stages.psf import fft_workers, wrapped_kernel
 
-__all__ = ["BandLimitedImager", "ExactImager", "BandImager", "image_planes", "pixel_means"]
+__all__ = ["BandLimitedImager", "ExactImager", "BandImager", "image_planes", "pixel_means", "made_ahead"]
 
 # Rows of a plane transformed at once by `BandLimitedImager` (bounded temporaries).
 _BLOCK_ROWS = 128
@@ -439,19 +442,25 @@ class BandImager:
         out = np.empty((n_planes,) + self.detector_shape, dtype=dtype)
         slab = np.zeros((n_planes, fy, fx), dtype=self.dtype)
         field = slice(self.left, self.left + nx)
-        made = 0                                   # grid rows [0, made) rendered
         d_top, d_left = self.top // factor, self.left // factor
+        # Each band's new rows, a few hundred at a time (the renderer's output is a copy until placed):
+        # made in this order on a thread of their own, a band ahead, while the slabs are transformed.
+        new_rows, made = [], 0                     # grid rows [0, made) asked for
         for start in range(0, ny, band):
+            first = start - self.top
+            new_rows.append([])
+            for r0 in range(made, min(first + fy, ny), _BLOCK_ROWS * 2):
+                made = min(r0 + _BLOCK_ROWS * 2, first + fy, ny)
+                new_rows[-1].append((r0, made))
+        blocks = made_ahead(bands, [r for rows in new_rows for r in rows], -(-band // (_BLOCK_ROWS * 2)))
+        for start, rows_of_band in zip(range(0, ny, band), new_rows):
             first = start - self.top               # the grid row at slab row 0
             if start:
                 for plane in slab:                 # the overlap moves up by a band
                     plane[:fy - band] = plane[band:]
                     plane[fy - band:] = 0
-            # New rows, a few hundred at a time (the renderer's output is a copy until placed).
-            for r0 in range(made, min(first + fy, ny), _BLOCK_ROWS * 2):
-                r1 = min(r0 + _BLOCK_ROWS * 2, first + fy, ny)
-                slab[:, r0 - first:r1 - first, field] = bands(r0, r1)
-                made = r1
+            for r0, r1 in rows_of_band:
+                slab[:, r0 - first:r1 - first, field] = next(blocks)
             rows = slice(start // factor, min(start + band, ny) // factor)
             keep = (slice(d_top, d_top + rows.stop - rows.start), slice(d_left, d_left + nx // factor))
             base = self.slab(slab[0])[keep]
@@ -460,6 +469,45 @@ class BandImager:
                 image = self.slab(slab[i] - slab[0] if common else slab[i])[keep]
                 out[i, rows] = image + base if common else image
         return out
+
+
+def made_ahead(make, ranges, ahead):
+    """
+    ``make(start, stop)`` for each range in order, the next ones made on a thread while the caller
+    uses the current one.
+
+    The calls are made one at a time, in the order given (a renderer's state, a deferred truth's
+    rows, see the same calls as without the thread), at most ``ahead`` results waiting.
+
+    Parameters
+    ----------
+    make : callable
+        ``make(start, stop)`` → array.
+    ranges : list of (int, int)
+    ahead : int
+        Results made ahead of the one being used (at least 1).
+
+    Yields
+    ------
+    The results, in order.
+
+    Examples
+    --------
+    >>> [int(x) for x in made_ahead(lambda a, b: a + b, [(0, 1), (1, 2), (2, 3)], 2)]
+    [1, 3, 5]
+    """
+    pending = deque()
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        try:
+            for start, stop in ranges:
+                pending.append(pool.submit(make, start, stop))
+                if len(pending) > ahead:
+                    yield pending.popleft().result()
+            while pending:
+                yield pending.popleft().result()
+        finally:                   # abandoned: what was not started is not made
+            for future in pending:
+                future.cancel()
 
 
 def image_planes(values, imager):

@@ -30,7 +30,7 @@ import numpy as np
 
 from gongsynth.threads import run_chunks
 
-__all__ = ["cell_table", "render_disk"]
+__all__ = ["cell_table", "render_disk", "disk_counts"]
 
 @nb.njit(cache=True, inline="always")
 def _splitmix(state):
@@ -67,6 +67,40 @@ def _bilinear2(first, second, lon0, lat0, step, lon, lat):
     b = ((1 - fy) * ((1 - fx) * second[i, j] + fx * second[i, j + 1])
          + fy * ((1 - fx) * second[i + 1, j] + fx * second[i + 1, j + 1]))
     return a, b
+
+
+@nb.njit(cache=True, inline="always")
+def _ray(x, y, distance, radius, cb, sb):
+    """
+    The sight line of helioprojective (x, y) (rad) to the sphere (`gongsynth.geometry.disk_geometry`):
+    (μ, sx, sy, sz), the point it meets in Stonyhurst cartesian km; μ = -1 where it misses.
+    """
+    q = x * x + y * y
+    norm = math.sqrt(1 + q)
+    disc = radius * radius - distance * distance * q / (1 + q)
+    if disc <= 0:
+        return -1.0, 0.0, 0.0, 0.0
+    t = distance / norm - math.sqrt(disc)
+    px, py, pz = t * x / norm, t * y / norm, distance - t / norm
+    sx, sy, sz = pz * cb - py * sb, px, pz * sb + py * cb
+    nxo, nyo, nzo = -x / norm, -y / norm, 1 / norm
+    mu = ((nzo * cb - nyo * sb) * sx + nxo * sy + (nzo * sb + nyo * cb) * sz) / radius
+    return mu, sx, sy, sz
+
+
+@nb.njit(cache=True, inline="always")
+def _latitude_longitude(sx, sy, sz, radius):
+    """Stonyhurst latitude and longitude (rad) of a point on the sphere."""
+    return math.asin(min(max(sz / radius, -1.0), 1.0)), math.atan2(sy, sx)
+
+
+@nb.njit(cache=True, inline="always")
+def _velocity_index(vel, v_first, v_step, n_v):
+    """Fractional index of a velocity in the basis' table, clamped, and whether it was outside."""
+    xv = (vel - v_first) / v_step
+    if xv < 0.0 or xv > n_v - 1:
+        return min(max(xv, 0.0), n_v - 1.0), True
+    return xv, False
 
 
 def cell_table(radius, cell_km, distance, b0):
@@ -192,6 +226,64 @@ def render_disk(light, truth, h, x0, y0, distance, b0, radius,
     return int(counts[:, 0].sum()), int(counts[:, 1].sum())
 
 
+def disk_counts(shape, h, x0, y0, distance, b0, radius, field, velocity, grid_lon0, grid_lat0, grid_step,
+                v_first, v_step, n_v):
+    """
+    The counts `render_disk` returns, without rendering: samples on the disk, and those whose velocity
+    falls outside the Doppler basis' table.
+
+    A grid whose light is made where the optics read it (`gongsynth.stages.scene.disk_render`) has its
+    counts here, before the light: the rays alone, and the velocities only where the large-scale grid
+    reaches beyond the table (a bilinear value lies within its four nodes' range).
+
+    Parameters
+    ----------
+    shape : (int, int)
+        (NY, NX) of the grid.
+    h, x0, y0, distance, b0, radius, field, velocity, grid_lon0, grid_lat0, grid_step
+        As in `render_disk`.
+    v_first, v_step : float
+        The basis' velocity table, ``v_first + k v_step``, ...
+    n_v : int
+        ... for k < n_v.
+
+    Returns
+    -------
+    on_disk, outside : int
+    """
+    # Rounding of a bilinear value and of its index: far below this margin (in table steps).
+    margin = 1e-6
+    low, high = (float(np.min(velocity)) - v_first) / v_step, (float(np.max(velocity)) - v_first) / v_step
+    check_velocity = not (low >= margin and high <= n_v - 1 - margin)
+    counts = np.zeros((int(shape[0]), 2), dtype=np.int64)
+    run_chunks(_count_rows, counts.shape[0], int(shape[1]), h, x0, y0, distance, b0, radius,
+               field, velocity, grid_lon0, grid_lat0, grid_step, v_first, v_step, int(n_v), check_velocity,
+               counts, min_chunk=8)
+    return int(counts[:, 0].sum()), int(counts[:, 1].sum())
+
+
+@nb.njit(cache=True, nogil=True, error_model="numpy")
+def _count_rows(start, stop, big_x, h, x0, y0, distance, b0, radius, field, velocity, grid_lon0, grid_lat0,
+                grid_step, v_first, v_step, n_v, check_velocity, counts):
+    """`disk_counts` for the rows ``start .. stop - 1`` (the same sight lines as `_render_rows`)."""
+    big_y = counts.shape[0]
+    cb, sb = math.cos(b0), math.sin(b0)
+    for row in range(start, stop):
+        y = y0 + (row - (big_y - 1) / 2) * h
+        for col in range(big_x):
+            x = x0 + (col - (big_x - 1) / 2) * h
+            mu, sx, sy, sz = _ray(x, y, distance, radius, cb, sb)
+            if mu <= 0:
+                continue
+            counts[row, 0] += 1
+            if check_velocity:
+                b, lon = _latitude_longitude(sx, sy, sz, radius)
+                _, vel = _bilinear2(field, velocity, grid_lon0, grid_lat0, grid_step, math.degrees(lon),
+                                    math.degrees(b))
+                if _velocity_index(vel, v_first, v_step, n_v)[1]:
+                    counts[row, 1] += 1
+
+
 @nb.njit(cache=True, nogil=True, error_model="numpy")
 def _render_rows(start, stop, light, truth, h, x0, y0, distance, b0, radius,
                  field, velocity, grid_lon0, grid_lat0, grid_step,
@@ -220,27 +312,16 @@ def _render_rows(start, stop, light, truth, h, x0, y0, distance, b0, radius,
         y = y0 + (row - (big_y - 1) / 2) * h
         for col in range(big_x):
             x = x0 + (col - (big_x - 1) / 2) * h
-            # -- the ray to the sphere (gongsynth.geometry.disk_geometry)
-            q = x * x + y * y
-            norm = math.sqrt(1 + q)
-            disc = radius * radius - distance * distance * q / (1 + q)
-            if disc <= 0:
-                continue
-            t = distance / norm - math.sqrt(disc)
-            px, py, pz = t * x / norm, t * y / norm, distance - t / norm
-            sx, sy, sz = pz * cb - py * sb, px, pz * sb + py * cb
-            nxo, nyo, nzo = -x / norm, -y / norm, 1 / norm
-            mu = ((nzo * cb - nyo * sb) * sx + nxo * sy + (nzo * sb + nyo * cb) * sz) / radius
+            mu, sx, sy, sz = _ray(x, y, distance, radius, cb, sb)
             if mu <= 0:
                 continue
             mu = min(mu, 1.0)
-            b = math.asin(min(max(sz / radius, -1.0), 1.0))
-            lon = math.atan2(sy, sx)
+            b, lon = _latitude_longitude(sx, sy, sz, radius)
             counts[band_row, 0] += 1
             for k in range(k_row):
                 acc[k] = 0.0
-            lon_d, lat_d = math.degrees(lon), math.degrees(b)
-            m, vel = _bilinear2(field, velocity, grid_lon0, grid_lat0, grid_step, lon_d, lat_d)
+            m, vel = _bilinear2(field, velocity, grid_lon0, grid_lat0, grid_step, math.degrees(lon),
+                                math.degrees(b))
             sign = 1.0 if m >= 0 else -1.0
             level0, wl = _bracket(level_net, abs(m))
             if abs(m) >= level_net[n_levels - 1]:
@@ -299,10 +380,9 @@ def _render_rows(start, stop, light, truth, h, x0, y0, distance, b0, radius,
             ld = 0.0
             for k in range(ld_coeff.size - 1, -1, -1):
                 ld = ld * mu + ld_coeff[k]
-            xv = (vel - v_first) / v_step
-            if xv < 0.0 or xv > n_v - 1:
+            xv, off_table = _velocity_index(vel, v_first, v_step, n_v)
+            if off_table:
                 counts[band_row, 1] += 1
-                xv = min(max(xv, 0.0), n_v - 1.0)
             # The true B·n: the patch frame's observer lies toward +x at the sample's own angle.
             truth[row, col] = acc[b_off] * mu + acc[b_off + 1] * math.sin(view)
             if n_out == 0:

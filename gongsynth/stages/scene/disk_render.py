@@ -6,12 +6,15 @@ for a `~gongsynth.stages.scene.library.PatchLibrary`: the large scales
 (`gongsynth.stages.scene.surface.large_scale_grid`) on a heliographic grid,
 then one pass of `gongsynth.stages.scene.disk_kernel.render_disk` over the
 supersampled grid (~1 s for the default 4300² samples on 2 cores).  A grid whose light
-would take more than `LIGHT_BYTES` (HMI's 12 planes of 8192² samples) gets its truth at once
-(a pass without the light's sums) and its light where the optics read it, a band of rows of
-every plane per pass of the renderer (a `~gongsynth.stages.scene.scene.DeferredStack`).
+would take more than `LIGHT_BYTES` (HMI's 12 planes of 8192² samples) gets its light and truth
+where the optics read them, a band of rows of every plane and the truth's same rows per pass of the
+renderer (`~gongsynth.stages.scene.scene.DeferredStack` s), and its counts (samples on the disk,
+velocities beyond the basis' table) from the sight lines alone (`disk_counts`).
 """
 import mmap
+import sys
 import warnings
+from pathlib import Path
 
 import astropy.units as u
 import numpy as np
@@ -19,7 +22,9 @@ import numpy as np
 from gongsynth.geometry import as_obstime, pointing_centre, pointing_offset, wcs_header
 from gongsynth.seeding import as_seed_sequence
 from gongsynth.stages.channels import CHANNEL_UNIT
-from gongsynth.stages.scene.disk_kernel import cell_table, render_disk
+from gongsynth.stages.scene import shifts
+from gongsynth.stages.scene.disk_kernel import cell_table, disk_counts, render_disk
+from gongsynth.stages.scene.library_store import derived_arrays
 from gongsynth.stages.scene.scene import DeferredStack, Scene, radiance_at_earth, sky_grid
 from gongsynth.stages.scene.shifts import reduced_basis
 from gongsynth.stages.scene.surface import large_scale_grid
@@ -58,17 +63,23 @@ def _plane_group(n_planes, grid):
     return int(min(n_planes, max(1, LIGHT_BYTES // per_plane)))
 
 
-def _deferred_light(render, n_planes, grid, unit, patches=None):
+def _deferred_scene(render, n_planes, truth, unit, patches=None):
     """
-    The light as a `DeferredStack`: every plane of a band of rows in one pass of the renderer
-    (`DeferredStack.band`: what the optics read), or one plane's rows, its group of planes rendered
-    whole (`_plane_group`) when first asked for.
+    The light and its truth as `DeferredStack` s, made in the same passes of the renderer.
 
-    A whole plane is given as a copy, so that a reader that keeps one
+    The light: every plane of a band of rows in one pass (`DeferredStack.band`: what the optics
+    read), or one plane's rows, its group of planes rendered whole (`_plane_group`) when first asked
+    for.  A whole plane is given as a copy, so that a reader that keeps one
     (`gongsynth.stages.imagers.image_planes` keeps the first) does not keep its group.
+
+    The truth: each pass of the light writes its rows of ``truth`` too (the same numbers as a pass
+    for the truth alone), so the optics, which read the truth after the light, find it made; rows
+    asked for before their light are made by a pass without the light's sums.
     """
+    grid = truth.shape
     group = _plane_group(n_planes, grid)
     cache = {"start": None, "block": None}
+    made = np.zeros(grid[0], dtype=bool)     # the truth's rows written so far
 
     def rows(i, start, stop):
         g0 = (i // group) * group
@@ -76,6 +87,7 @@ def _deferred_light(render, n_planes, grid, unit, patches=None):
             cache["block"] = None    # free the old group before the new one is made
             block = np.zeros((min(group, n_planes - g0),) + grid, dtype=np.float32)
             render(block, g0)
+            made[:] = True
             cache["start"], cache["block"] = g0, block
         out = cache["block"][i - g0, start:stop]
         return out.copy() if (start, stop) == (0, grid[0]) else out
@@ -83,13 +95,23 @@ def _deferred_light(render, n_planes, grid, unit, patches=None):
     def bands(start, stop):
         block = np.zeros((n_planes, stop - start, grid[1]), dtype=np.float32)
         render(block, 0, start)
+        made[start:stop] = True
         return block
 
     def release():
         cache["block"] = None
         _drop_pages(patches)
 
-    return DeferredStack((n_planes,) + grid, np.float32, unit, rows, release, bands)
+    def truth_rows(i, start, stop):
+        missing = np.flatnonzero(~made[start:stop])
+        if missing.size:
+            first, last = start + missing[0], start + missing[-1] + 1
+            render(np.zeros((0, last - first, grid[1]), dtype=np.float32), 0, first)
+            made[first:last] = True
+        return truth[start:stop]
+
+    return (DeferredStack((n_planes,) + grid, np.float32, unit, rows, release, bands),
+            DeferredStack(grid, np.float32, u.G, truth_rows))
 
 
 def _drop_pages(array):
@@ -124,7 +146,9 @@ def render_rows(library, tolerance=None):
     every filtergram of every stored row, at every tabulated velocity, stays within ``tolerance`` of
     the filtergram of its continuum; a sample mixes rows with positive weights and scales them alike
     (limb darkening), so its error obeys the same bound.  Each E and V part of a row is replaced by
-    its continuum and its r new coordinates; B_z and B_x are kept.
+    its continuum and its r new coordinates; B_z and B_x are kept.  The reduced rows of a cached
+    library are kept in its cache entry (`~gongsynth.stages.scene.library_store.derived_arrays`, keyed by
+    the tolerance and the source of the code that reduces them): computed once, read back after.
 
     Parameters
     ----------
@@ -141,9 +165,24 @@ def render_rows(library, tolerance=None):
     bound : float
         The bound on the filtergrams' relative error (0 for the stored basis).
     """
-    basis = library.basis
     if tolerance is None:
-        return np.asarray(library.patches), np.asarray(library.uniform), basis.amplitudes, 0.0
+        return np.asarray(library.patches), np.asarray(library.uniform), library.basis.amplitudes, 0.0
+    # Kept with a cached library: its key, the tolerance and the code that reduces (this module's and
+    # the basis') name them.
+    key = [repr(float(tolerance)), np.__version__] + [Path(module.__file__).read_bytes()
+                                                       for module in (sys.modules[__name__], shifts)]
+    rows = derived_arrays(library, "render-rows", lambda: _reduced_rows(library, tolerance), key)
+    if rows["patches"].size == 0:       # no lower rank within the tolerance: the stored rows
+        return np.asarray(library.patches), np.asarray(library.uniform), library.basis.amplitudes, 0.0
+    return rows["patches"], rows["uniform"], rows["amplitudes"], float(rows["bound"])
+
+
+def _reduced_rows(library, tolerance):
+    """
+    `render_rows` with a tolerance, computed: a dict of patches, uniform, amplitudes and bound (empty
+    rows where no lower rank is within the tolerance: the stored ones are not copied into the cache).
+    """
+    basis = library.basis
     j1 = basis.rank + 1
     lay = library.layout()
     parts = lay["e"] + [lay["v"]]
@@ -156,7 +195,8 @@ def render_rows(library, tolerance=None):
 
     transform, amplitudes, bound = reduced_basis(basis, spectra, tolerance)
     if transform is None:
-        return np.asarray(library.patches), np.asarray(library.uniform), basis.amplitudes, 0.0
+        return dict(patches=np.zeros(0, np.float32), uniform=np.zeros(0, np.float32),
+                    amplitudes=basis.amplitudes, bound=np.float64(0.0))
     r1 = transform.shape[0] + 1
     # The stored E and V parts (continuum, J coordinates) to (continuum, r coordinates).
     block = np.zeros((j1, r1))
@@ -172,7 +212,7 @@ def render_rows(library, tolerance=None):
                 rows[start:start + chunk.shape[0], i * r1:(i + 1) * r1] = chunk[:, offset:offset + j1] @ block
             rows[start:start + chunk.shape[0], -2:] = chunk[:, lay["bz"]:lay["bx"] + 1]
         out.append(rows.reshape(array.shape[:-1] + (rows.shape[1],)))
-    return out[0], out[1], amplitudes, bound
+    return dict(patches=out[0], uniform=out[1], amplitudes=amplitudes, bound=np.float64(bound))
 
 
 def library_scene(library, *, obstime=None, instrument=None, detector_shape=None, supersampling=None,
@@ -290,12 +330,18 @@ def library_scene(library, *, obstime=None, instrument=None, detector_shape=None
             float(to_earth.value * (1 * u.nm).to_value(u.cm)), plane0, row0)
 
     if _plane_group(n_planes, grid) < n_planes:
-        # Only the truth now (a cheap pass); the light where the optics read it, a band at a time.
-        on_disk, outside = render(np.zeros((0,) + grid, dtype=np.float32), 0)
-        light = _deferred_light(render, n_planes, grid, to_earth.unit, library.patches)
+        # The light and the truth where the optics read them, a band of rows at a time, in one pass
+        # of the renderer; the counts now, from the sight lines alone.
+        on_disk, outside = disk_counts(
+            grid, scale.to_value(u.rad), *pointing_offset(pointing), distance, b0, r_sun, large.field,
+            large.velocity, float(large.longitude[0]), float(large.latitude[0]),
+            float(large.longitude[1] - large.longitude[0]), float(basis.velocity[0]),
+            float(basis.velocity[1] - basis.velocity[0]), basis.totals.shape[0])
+        light, truth_data = _deferred_scene(render, n_planes, blos, to_earth.unit, library.patches)
     else:
         light = np.zeros((n_planes,) + grid, dtype=np.float32)
         on_disk, outside = render(light, 0)
+        truth_data = u.Quantity(blos, u.G, copy=False)
     if outside:
         warnings.warn(f"{outside} samples have a large-scale velocity beyond the library's Doppler basis "
                       f"(±{basis.max_velocity:.0f}): clamped", stacklevel=3)
@@ -306,9 +352,8 @@ def library_scene(library, *, obstime=None, instrument=None, detector_shape=None
                 render_rank=amplitudes.shape[-1], render_error_bound=bound,
                 on_disk_samples=int(on_disk), large_scale=large, library=repr(library))
     common = dict(boundary="zero", instrument=inst, detector_shape=det, centre=centre)
-    truth = Scene(u.Quantity(blos, u.G, copy=False), scale, header, meta={**meta, "quantity": "blos"},
-                  **common)
+    truth = Scene(truth_data, scale, header, meta={**meta, "quantity": "blos"}, **common)
     data = light if isinstance(light, DeferredStack) else u.Quantity(light, to_earth.unit, copy=False)
-    light_scene = Scene(data, scale, header, blos=truth.data,
+    light_scene = Scene(data, scale, header, blos=truth_data,
                         meta={**meta, "quantity": "radiance"}, **common)
     return light_scene, truth

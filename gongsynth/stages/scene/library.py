@@ -39,9 +39,7 @@ import dataclasses
 import hashlib
 import json
 import os
-import shutil
 import sys
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -52,6 +50,9 @@ from gongsynth import instruments
 from gongsynth.files import fingerprint
 from gongsynth.seeding import as_seed_sequence, child_sequence
 from gongsynth.stages.scene.library_layout import library_layout
+
+# CacheWarning: re-exported, the name callers have caught since the cache's first version.
+from gongsynth.stages.scene.library_store import CacheWarning, warn_cache, write_folder  # noqa: F401
 from gongsynth.stages.scene.shifts import ShiftBasis
 from gongsynth.sun.photosphere import (
     DeferredStokes,
@@ -63,7 +64,7 @@ from gongsynth.sun.photosphere import (
 from gongsynth.version import version
 
 __all__ = ["LEVELS", "STRONG_FIELDS", "DEFAULT_THETA", "LIBRARY_SEED", "PatchLibrary", "build_library",
-           "cached_library", "cache_directory", "CacheWarning"]
+           "cached_library", "cache_directory"]
 
 #: The patch levels: name and the `model_photosphere` knobs that set them (no
 #: sunspot, no plage patches: the flux sits in network elements of
@@ -416,53 +417,12 @@ def _key(arguments, sun):
     return digest.hexdigest()[:24]
 
 
-# Temporary folders of a save are "<entry>.tmp-<pid>-<random>"; one older than this whose process is gone
-# (or older than an hour: another machine's) was left by a killed save.
-_STALE_SECONDS = 60.0
 _VERIFIED = set()    # entries whose checksums this process has checked
-
-
-class CacheWarning(UserWarning):
-    """The library cache could not be used (unwritable, or a damaged entry): the run goes on without it."""
-
-
-def _warn(message):
-    import warnings
-
-    warnings.warn(message, CacheWarning, stacklevel=3)
-
-
-def _clean_stale(parent):
-    """Remove the temporary folders of killed saves (another process's live one is left alone)."""
-    import time
-
-    for tmp in parent.glob("library-*.tmp-*"):
-        try:
-            age = time.time() - tmp.stat().st_mtime
-            pid = int(tmp.name.split(".tmp-")[1].split("-")[0])
-        except (OSError, ValueError, IndexError):
-            continue
-        if age > 3600 or (age > _STALE_SECONDS and not _alive(pid)):
-            shutil.rmtree(tmp, ignore_errors=True)
-
-
-def _alive(pid):
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except OSError:     # exists, another user's
-        return True
-    return True
 
 
 def _save(library, folder):
     """Write an entry atomically (replacing a damaged one), each file's SHA-256 in library.json."""
-    tmp = None
-    try:
-        folder.parent.mkdir(parents=True, exist_ok=True)
-        _clean_stale(folder.parent)
-        tmp = Path(tempfile.mkdtemp(prefix=f"{folder.name}.tmp-{os.getpid()}-", dir=folder.parent))
+    def fill(tmp):
         for name in _ARRAYS:
             np.save(tmp / f"{name}.npy", getattr(library, name))
         for name in _BASIS:
@@ -473,19 +433,15 @@ def _save(library, folder):
                  "mirror_ok": library.mirror_ok, "basis_error": library.basis.error, "meta": library.meta,
                  "sha256": {p.name: fingerprint(p) for p in sorted(tmp.glob("*.npy"))}}
         (tmp / "library.json").write_text(json.dumps(small))
-        if folder.exists():   # a damaged entry: moved aside, then removed
-            old = Path(tempfile.mkdtemp(prefix=f"{folder.name}.tmp-{os.getpid()}-", dir=folder.parent))
-            folder.rename(old / "entry")
-            shutil.rmtree(old, ignore_errors=True)
-        tmp.rename(folder)
+
+    try:
+        write_folder(folder, fill, "library-*")
         _VERIFIED.add(folder)
     except OSError as exc:
-        if tmp is not None:
-            shutil.rmtree(tmp, ignore_errors=True)
         if not (folder / "library.json").is_file():   # not another process's entry that won the race
-            _warn(f"could not write the patch library to the cache {folder.parent} ({exc.strerror or exc}); "
-                  f"the run goes on with the library in memory (set GONGSYNTH_CACHE_DIR to a writable "
-                  f"folder, or to 'off' for no disk cache)")
+            warn_cache(f"could not write the patch library to the cache {folder.parent} "
+                       f"({exc.strerror or exc}); the run goes on with the library in memory (set "
+                       f"GONGSYNTH_CACHE_DIR to a writable folder, or to 'off' for no disk cache)")
 
 
 def _verify(folder, small):
@@ -583,12 +539,14 @@ def cached_library(*, sun="milne-eddington", progress=False, **arguments):
                 instruments.get(arguments.get("instrument")).line)
             library = _load(folder, rows_line)
         except (OSError, ValueError, KeyError, TypeError) as exc:
-            _warn(f"the cached patch library {folder} is damaged ({exc}); it is rebuilt and replaced")
+            warn_cache(f"the cached patch library {folder} is damaged ({exc}); it is rebuilt and replaced")
             library = None
     if library is None:
         library = build()
         if folder is not None:
             _save(library, folder)
+            if folder in _VERIFIED:     # written: what is derived from it is kept beside it too
+                library = dataclasses.replace(library, meta={**library.meta, "cache": str(folder)})
     _MEMO.clear()      # keep one: a library is ~300 MB
     _MEMO[key] = library
     return library
