@@ -263,7 +263,10 @@ def _photosphere_knobs(values, sun="model-atmosphere", where="photosphere"):
         elif isinstance(default, bool):
             if not isinstance(value, bool):
                 raise TypeError(f"[{where}] {name} must be true or false, got {value!r}")
-        elif isinstance(default, str):  # a choice, or "auto" standing for true/false
+        elif default == "auto":         # "auto" standing for true/false by the box
+            if not (isinstance(value, bool) or value == "auto"):
+                raise TypeError(f"[{where}] {name} must be true, false or \"auto\", got {value!r}")
+        elif isinstance(default, str):  # a choice
             if not isinstance(value, (str, bool)):
                 raise TypeError(f"[{where}] {name} must be a string or true/false, got {value!r}")
         elif isinstance(value, bool) or not isinstance(value, (int, float)):

@@ -76,7 +76,7 @@ def test_same_seed_same_bits_and_other_streams_unchanged():
 
 
 @pytest.mark.parametrize(("kwargs", "match"), [
-    (dict(network="yes"), "network must be True or False"),
+    (dict(network="yes"), "network must be True, False or 'auto'"),
     (dict(network=True, supergranule_size=200 * u.Mm), "supergranule_size .* must fit in the box"),
     (dict(network=True, supergranule_size=-3 * u.Mm), "supergranule_size"),
 ])
@@ -88,6 +88,6 @@ def test_bad_inputs(kwargs, match):
 def test_config_knob():
     cfg = SimulationConfig(seed=1, photosphere={"network": True})
     assert cfg.sun_arguments()["network"] is True
-    assert "network" not in SimulationConfig(seed=1).sun_arguments()        # the default: unchanged runs
-    with pytest.raises(TypeError, match="network must be true or false"):
+    assert "network" not in SimulationConfig(seed=1).sun_arguments()        # the default: the builder's "auto"
+    with pytest.raises(TypeError, match='network must be true, false or "auto"'):
         SimulationConfig(seed=1, photosphere={"network": "yes"})

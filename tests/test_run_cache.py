@@ -64,16 +64,18 @@ def test_the_key_is_the_whole_configuration_and_the_version(monkeypatch):
 
 def test_an_inert_switch_at_its_inert_value_leaves_the_key_as_before_it_existed():
     base = SimulationConfig(seed=1)
-    text = run_cache.run_config(base).to_toml(comments=False)
+    assert 'network = "auto"' in run_cache.run_config(base).to_toml(comments=False)   # the default lays it
+    off = base.replace(photosphere={"network": False})
+    text = run_cache.run_config(off).to_toml(comments=False)
     assert "network = false" in text       # the switch is in the configuration ...
-    off = base.replace(photosphere={"network": False, "supergranule_size": 20 * u.Mm})
-    assert run_key(off) == run_key(base)   # ... but not in the key while it is off
-    # An entry cached before the switch existed (its TOML without the two keys) still reads as this run's.
+    assert run_key(off.replace(photosphere={"network": False, "supergranule_size": 20 * u.Mm})) == run_key(off)
+    assert run_key(off) != run_key(base)   # ... but not in the key while it is off
+    # An entry cached before the switch existed (its TOML without the two keys) still reads as the off run's.
     before = "".join(line for line in text.splitlines(keepends=True)
                      if not line.startswith(("network =", "supergranule_size =")))
     assert run_cache._keyed(before) == run_cache._keyed(text) != text
     on = base.replace(photosphere={"network": True})
-    assert run_key(on) != run_key(base)
+    assert run_key(on) != run_key(base) and run_key(on) != run_key(off)
     assert run_key(on.replace(photosphere={"network": True, "supergranule_size": 20 * u.Mm})) != run_key(on)
     # The Milne-Eddington Sun's own supergranule size has no such switch: it stays in the key.
     me = SimulationConfig(seed=1, sun="milne-eddington")

@@ -275,7 +275,7 @@ def build_atmosphere_library(*, seed=0, shape=None, pixel_size=None,
             for variant in range(count):
                 atmosphere = model_atmosphere(tuple(shape), pixel_size=pixel_size,
                                               seed=child_sequence(root, "library", number, variant),
-                                              **{**knobs, **overrides, "spot": False})
+                                              **{**knobs, **overrides, "spot": False, "network": False})
                 fill(atmosphere, patches[index])
                 nets.append(float(patches[index, :, :, 0, n_spec].mean()))
                 members.append(index)

@@ -201,7 +201,7 @@ def model_atmosphere(shape=(1024, 1024), pixel_size=96 * u.km, *, seed, nz=80,
                      internetwork_horizontal_field=50 * u.G, umbra_radius=7 * u.Mm,
                      penumbra_radius=16 * u.Mm, umbra_field=3000 * u.G, penumbra_field=1500 * u.G,
                      umbra_model="maltby-m", evershed_speed=2.0 * u.km / u.s, moat_speed=0.8 * u.km / u.s,
-                     microturbulence=0.6 * u.km / u.s, network=False, supergranule_size=30 * u.Mm):
+                     microturbulence=0.6 * u.km / u.s, network="auto", supergranule_size=30 * u.Mm):
     """
     A seeded, horizontally periodic 3-D model photosphere for LTE Stokes synthesis.
 
@@ -268,12 +268,13 @@ def model_atmosphere(shape=(1024, 1024), pixel_size=96 * u.km, *, seed, nz=80,
         Peak Evershed (2 km/s) and moat (0.8 km/s) outflows.
     microturbulence : `~astropy.units.Quantity`, optional
         Added unresolved velocity (default 0: the 3-D flow broadens the line).
-    network : bool, optional
-        Lay the kG elements on the boundaries of periodic supergranular cells,
-        with ephemeral bipoles inside the cells
-        (`~gongsynth.sun.model_atmosphere.network_layout`); default False: in
-        the lanes, clustered by a ~5 Mm noise field (the calibration tables
-        were built so; the default flips when they are rebuilt).
+    network : bool or "auto", optional
+        True: lay the kG elements on the boundaries of periodic supergranular
+        cells, with ephemeral bipoles inside the cells
+        (`~gongsynth.sun.model_atmosphere.network_layout`); False: in the
+        lanes, clustered by a ~5 Mm noise field; "auto" (default): True when
+        the box is at least 2 × ``supergranule_size`` on each side (the
+        default 98 Mm box is), False in smaller boxes.
     supergranule_size : `~astropy.units.Quantity`, optional
         With ``network``: mean spacing of the cell centres (30 Mm, Rieutord &
         Rincon 2010); it must fit in the box.
@@ -312,7 +313,7 @@ def _plan(shape, pixel_size, seed, nz, height_range, spot, granule_size, granula
           granulation_amplitude, granulation_velocity, velocity_decay_height, element_flux_density,
           element_field, element_model, element_depression, canopy, positive_fraction, internetwork_field,
           internetwork_horizontal_field, umbra_radius, penumbra_radius, umbra_field, penumbra_field,
-          umbra_model, evershed_speed, moat_speed, microturbulence, network=False,
+          umbra_model, evershed_speed, moat_speed, microturbulence, network="auto",
           supergranule_size=30 * u.Mm):
     """`model_atmosphere`'s arguments checked and its whole-plane (2-D) ingredients made, as a dict."""
     if (not isinstance(shape, (tuple, list)) or len(shape) != 2
@@ -330,9 +331,11 @@ def _plan(shape, pixel_size, seed, nz, height_range, spot, granule_size, granula
     if not (z_lo <= -200 and z_hi >= 400):
         raise ValueError(f"height_range must reach at least 200 km below and 400 km above tau = 1, got "
                          f"{height_range}")
-    for name, value in (("element_depression", element_depression), ("canopy", canopy), ("network", network)):
+    for name, value in (("element_depression", element_depression), ("canopy", canopy)):
         if not isinstance(value, (bool, np.bool_)):
             raise ValueError(f"{name} must be True or False, got {value!r}")
+    if not (isinstance(network, (bool, np.bool_)) or network == "auto"):
+        raise ValueError(f"network must be True, False or 'auto', got {network!r}")
     if spot not in (True, False, "auto"):
         raise ValueError(f"spot must be True, False or 'auto', got {spot!r}")
     gran = check_scalar(granule_size, u.km, "granule_size")
@@ -366,6 +369,9 @@ def _plan(shape, pixel_size, seed, nz, height_range, spot, granule_size, granula
         raise ValueError(f"spot=True: the spot (penumbra_radius {penumbra_radius}) does not fit in the "
                          f"{nx * px / 1e3:.1f} x {ny * px / 1e3:.1f} Mm box (needs 2.2 x penumbra_radius)")
     has_spot = bool(spot is True or (spot == "auto" and fits))
+    # "auto": the network needs a few cells to form a pattern; boxes under 2 cells a side keep the
+    # noise clustering (test boxes, the full disk's one-cell library patches).
+    network = bool(network if isinstance(network, (bool, np.bool_)) else min(ny, nx) * px >= 2 * sg)
 
     zg = np.linspace(z_lo, z_hi, int(nz))
     ref = reference_stratifications(tuple(zg), granulation_models, amp, element_model, b_el, umbra_model,
