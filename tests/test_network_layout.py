@@ -91,3 +91,14 @@ def test_config_knob():
     assert "network" not in SimulationConfig(seed=1).sun_arguments()        # the default: the builder's "auto"
     with pytest.raises(TypeError, match='network must be true, false or "auto"'):
         SimulationConfig(seed=1, photosphere={"network": "yes"})
+
+
+def test_auto_lays_the_network_where_the_box_holds_two_cells_a_side():
+    # 98 Mm box, 30 Mm cells: on; the same box with 50 Mm cells (< 2 a side) and a 49 Mm box: off.
+    assert _sun(network="auto")["meta"]["network"]["cells"] == _sun(network=True)["meta"]["network"]["cells"]
+    assert np.array_equal(_sun(network="auto")["spectra"][0], _sun(network=True)["spectra"][0])
+    assert "network" not in _sun(network="auto", supergranule_size=50 * u.Mm)["meta"]
+    small = model_sun((64, 64), PIXEL, seed=1, nz=16, spot=False)._plan       # the default: "auto"
+    assert "network" not in small["meta"]
+    assert np.array_equal(small["spectra"][0],
+                          model_sun((64, 64), PIXEL, seed=1, nz=16, spot=False, network=False)._plan["spectra"][0])

@@ -18,8 +18,9 @@ geometric grid (`~gongsynth.sun.model_atmosphere.stratification`):
   the Wilson depression W that pressure balance P_int + B₀²/8π = P_ext at
   equal geometric height gives at the tube's τ = 1; weight f = |B_z|/B₀ of
   the element field on that plane (a filling factor, ≤ 1); placed in the lanes,
-  clustered by noise or (``network=True``) on supergranular cell boundaries
-  (`~gongsynth.sun.model_atmosphere.network_layout`);
+  on supergranular cell boundaries (``network``: by default in boxes of at
+  least two cells a side; `~gongsynth.sun.model_atmosphere.network_layout`)
+  or clustered by a noise field;
 - **sunspot**: Maltby et al. (1986) M umbra and the del Toro Iniesta et al.
   (1994) penumbra, each placed by the same pressure balance with the umbral /
   penumbral field strength.

@@ -1,9 +1,9 @@
 r"""
 The 3-D Sun's magnetic network: where its kG elements sit on a periodic supergranular pattern.
 
-With ``network=True`` (`gongsynth.sun.model_atmosphere.builder`) the kG
-elements are not clustered by a noise field but laid on supergranular cell
-boundaries, the same picture as the disk-scale network
+With ``network`` on (`gongsynth.sun.model_atmosphere.builder`; by default
+in every box of at least two cells a side) the kG elements are not clustered
+by a noise field but laid on supergranular cell boundaries, the same picture as the disk-scale network
 (`gongsynth.sun.surface_field.network`, whose numbers are reused here):
 
 - **Cells**: periodic Voronoi cells (`gongsynth.sun.photosphere.voronoi.cell_walls`)
