@@ -37,9 +37,9 @@ import gongsynth
 from gongsynth.analysis.compare import compare
 from gongsynth.analysis.degrade import degrade_to_gong
 from gongsynth.analysis.disk import disk_coordinates, disk_values
-from gongsynth.config import SimulationConfig
+from gongsynth.config import Effects, SimulationConfig
 from gongsynth.geometry import disk_geometry
-from gongsynth.observing import like_gong, site_location
+from gongsynth.observing import as_observed, like_gong, site_location
 from gongsynth.sun.rotation import disk_velocity
 from gongsynth.sun.surface_field import surface_field_from_map
 
@@ -56,16 +56,20 @@ MDI = REAL / "mdi" / "mdi.fd_m_96m_lev182.20101015_000000_TAI.data.fits"
 # (the disk's centre sits 11.6 pixels east and 1.9 south of the image's, so
 # the simulated disk lies on the real one's pixels) from the real file's
 # header.  The real map is the average of nine one-minute magnetograms
-# (``N_USED = 9``), so the run takes 9 minutes.  GONG's minute-by-minute
-# reduction and frame-to-frame seeing (``minute_average``, ``frame_seeing``:
-# opt-in, see the scene and optics guide for what they change) are left off
-# here to keep the gallery fast.  Both maps are solar
-# north up: GONG's reduction takes out the P angle (the header's ``PA``).
+# (``N_USED = 9``), so the run takes 9 minutes.  ``as_observed`` adds what
+# ``gongsynth simulate --like`` does by default in full-disk mode: the file's
+# count level (its DIODE sums, ``like_counts``), seeing that changes from
+# frame to frame, GONG's minute-by-minute reduction and averaging, and the
+# image rotation of that reduction (the noise guide measures each).  Both
+# maps are solar north up: GONG's reduction takes out the P angle (the
+# header's ``PA``).
 
 real = gongsynth.load_observation(BIG_BEAR)
 settings, instrument = like_gong(BIG_BEAR)
+settings, effects = as_observed(settings, {}, mode="full-disk", instrument_name=instrument.name)
 config = SimulationConfig(mode="full-disk", duration=9 * u.min, seed=1, surface_field="synthetic",
-                          instrument=instrument.replace(supersampling=3), **settings)
+                          instrument=instrument.replace(supersampling=3), effects=Effects(**effects),
+                          **settings)
 quiet = gongsynth.simulate(config=config, progress=False)
 
 

@@ -124,9 +124,10 @@ def build_parser():
     sim.add_argument("--like", type=Path, metavar="GONG.fits",
                      help="take date, site and plate scale from a real GONG full-disk file ('what GONG "
                           "saw at Big Bear on 2009-09-05 18:54'); --date and --site still win")
-    sim.add_argument("--like-counts", dest="like_counts", action="store_true", default=None,
-                     help="with --like: observe at the file's count level (its DIODE sums: that "
-                          "observation's effective area) instead of the instrument's effective_area")
+    sim.add_argument("--like-counts", dest="like_counts", action=argparse.BooleanOptionalAction, default=None,
+                     help="with --like (full disk): observe at the file's count level (its DIODE sums: "
+                          "that observation's effective area; the default) or, with --no-like-counts, "
+                          "with the instrument's effective_area")
     sim.add_argument("--pointing", type=_number(float), nargs=2, metavar=("TX", "TY"),
                      help="full-disk mode: helioprojective x and y of the detector's centre in arcsec "
                           "(default 0 0: the Sun's centre; --like takes the real file's)")
@@ -161,8 +162,10 @@ def build_parser():
             effects.add_argument(f"--no-{flag}", dest=f"effect_{effect.name}", action="store_false",
                                  default=None, help=f"switch off the {words}")
         else:
-            effects.add_argument(f"--{flag}", dest=f"effect_{effect.name}", action="store_true",
-                                 default=None, help=f"switch on the {words} (off by default)")
+            effects.add_argument(f"--{flag}", dest=f"effect_{effect.name}",
+                                 action=argparse.BooleanOptionalAction, default=None,
+                                 help=f"switch the {words} on (off by default; on by default in a "
+                                      f"full-disk --like run) or off")
 
     cmp_ = sub.add_parser("compare", help="compare a simulated map with an observed one")
     cmp_.add_argument("simulated", type=Path, help="gongsynth magnetogram FITS")
@@ -204,7 +207,7 @@ def build_parser():
 
 def _simulation_config(args):
     from gongsynth.config import SimulationConfig
-    from gongsynth.observing import like_gong
+    from gongsynth.observing import as_observed, like_gong
 
     config = SimulationConfig.from_toml(args.config) if args.config else SimulationConfig()
     changes = {}
@@ -230,10 +233,13 @@ def _simulation_config(args):
             raise ValueError(f"--like {args.like}: {_cause(exc)} (expected a GONG full-disk FITS "
                              f"file)") from exc
         changes.update(taken)
-    if args.like_counts:
-        changes["like_counts"] = True
+    if args.like_counts is not None:
+        changes["like_counts"] = args.like_counts
     switched = {e.name: getattr(args, f"effect_{e.name}") for e in dataclasses.fields(Effects)
                 if getattr(args, f"effect_{e.name}") is not None}
+    if args.like is not None:
+        changes, switched = as_observed(changes, switched, mode=changes.get("mode", config.mode),
+                                        instrument_name=changes.get("instrument", config.instrument).name)
     if switched:
         changes["effects"] = dataclasses.replace(config.effects, **switched)
     if args.shape is not None:

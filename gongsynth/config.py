@@ -24,7 +24,7 @@ from astropy.time import Time
 from gongsynth import instruments
 from gongsynth.geometry import DEFAULT_OBSTIME as _DEFAULT_TIME
 from gongsynth.geometry import Pointing
-from gongsynth.observing import GONG_SITES, check_site, like_gong
+from gongsynth.observing import GONG_SITES, as_observed, check_site, like_gong
 from gongsynth.seeding import root_seed
 from gongsynth.stages.camera.integrate import ENGINES
 from gongsynth.suns import DEFAULT_SUNS, SUNS, default_sun, photosphere_defaults, run_grid_default
@@ -695,11 +695,14 @@ class SimulationConfig:
                                     f"got {sim[name]!r}")
                 sim[name] = tuple(sim[name])
         instrument = instruments.from_dict(table.get("instrument", {}))
+        effects = table.get("effects", {})
         if sim.get("like") is not None:
             sim, instrument = like_gong(sim["like"], settings=sim, instrument=instrument,
                                         mode=sim.get("mode", cls.mode),
                                         fixed_plate_scale="plate_scale" in table.get("instrument", {}))
-        return cls(instrument=instrument, effects=Effects.from_dict(table.get("effects", {})),
+            sim, effects = as_observed(sim, effects, mode=sim.get("mode", cls.mode),
+                                       instrument_name=instrument.name)
+        return cls(instrument=instrument, effects=Effects.from_dict(effects),
                    photosphere=table.get("photosphere", {}), **sim)
 
 

@@ -103,3 +103,32 @@ def test_like_gong_reads_the_header_only_when_needed(tmp_path):
                                                                    "pointing": [0, 0] * u.arcsec},
                                fixed_plate_scale=True)
     assert settings["like"].endswith("absent.fits") and inst.plate_scale == 2.5 * u.arcsec
+
+
+def test_a_full_disk_like_run_observes_as_the_file_did_unless_told_otherwise():
+    import sunpy.data.test
+
+    from gongsynth.cli import _simulation_config, build_parser
+    from gongsynth.observing import AS_OBSERVED_EFFECTS
+
+    path = sunpy.data.test.get_test_filepath("gong_magnetogram.header")
+    disk = SimulationConfig.from_toml(f'[simulation]\nlike = "{path}"\nmode = "full-disk"\nseed = 1\n')
+    assert disk.like_counts and all(getattr(disk.effects, name) for name in AS_OBSERVED_EFFECTS)
+    assert SimulationConfig.from_toml(disk.to_toml()) == disk          # written out, so it repeats
+    mine = SimulationConfig.from_toml(f'[simulation]\nlike = "{path}"\nmode = "full-disk"\n'
+                                      f'like_counts = false\n[effects]\nimage_rotation = false\n')
+    assert not mine.like_counts and not mine.effects.image_rotation and mine.effects.frame_seeing
+    assert SimulationConfig.from_toml(mine.to_toml()) == mine
+    # A tiled run takes the date and site only; a run without like keeps every opt-in effect off.
+    tiled = SimulationConfig.from_toml(f'[simulation]\nlike = "{path}"\n')
+    assert not tiled.like_counts and tiled.effects.opted_in == ()
+    assert SimulationConfig(mode="full-disk").effects.opted_in == ()
+
+    def cli(*flags):
+        return _simulation_config(build_parser().parse_args(["simulate", "--out", "x", *flags]))
+
+    run = cli("--like", path, "--mode", "full-disk", "--no-minute-average", "--no-like-counts")
+    assert not run.like_counts and not run.effects.minute_average
+    assert run.effects.frame_seeing and run.effects.image_rotation
+    assert cli("--like", path, "--mode", "full-disk", "--seed", "1") == disk
+    assert cli("--mode", "full-disk", "--frame-seeing").effects.opted_in == ("frame_seeing",)
