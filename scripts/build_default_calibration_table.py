@@ -10,8 +10,9 @@ root seed, and fits the papers' quiet-Sun and sunspot curves
 resamples).  Two grids of the Sun's columns:
 
 - ``--grid paper`` (default): 1024² columns of 96 km, the papers' resolution
-  (Rempel's run at 48 km binned ×2), seeds 1 2 3 4.  About 3 CPU-minutes
-  per run, 24 runs per instrument: ~75 CPU-minutes.
+  (Rempel's run at 48 km binned ×2), seeds 1 2 3 4.  24 runs per
+  instrument: 19-25 minutes of wall with ``--workers 2`` on two cores (the
+  tables rebuilt with the network, 2026-11).
 - ``--grid run``: 256² columns of 384 km (`gongsynth.simulate`'s default),
   seeds 1 2.  About 1 CPU-minute per run, 12 runs: ~15 minutes on 2 cores.
 
