@@ -274,7 +274,7 @@ plt.show()
 # is about 1.
 #
 # At 60° the spot's push is balanced by one the other way: without the spot the
-# factor falls to 0.72 — GONG then reads *more* weak flux than the truth
+# factor falls to 0.73 — GONG then reads *more* weak flux than the truth
 # holds.  Seen at an angle, the mostly horizontal internetwork field points
 # toward the observer on one side of a granule and away on the other, where
 # the brightness differs; the blurred truth cancels the two by area, GONG's

@@ -23,7 +23,7 @@ SUNS = {"milne-eddington": model_photosphere, "model-atmosphere": model_atmosphe
 #: Sun of issue 14:
 #: 1.23 / 1.00 at 0° / 60° with 384 km columns, 1.25 / 1.00 with 192 km, 1.22 / 0.99 with 96 km) but
 #: on the sunspot, which needs a box of 35 Mm or more: without it 0.94 / 0.69 (98 Mm box; today's Sun:
-#: 0.98 / 0.72 against 1.32 / 1.05, ``data/weak_flux_factors.ecsv``), and a 25 Mm
+#: 0.93 / 0.73 against 1.25 / 1.05 with its network, ``data/weak_flux_factors.ecsv``), and a 25 Mm
 #: box of 96 km columns, too small for a spot, gives 1.06 / 0.69.
 RUN_GRIDS = {"model-atmosphere": {"shape": (256, 256), "pixel_size": 384 * u.km}}
 
