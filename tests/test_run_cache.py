@@ -68,7 +68,8 @@ def test_an_inert_switch_at_its_inert_value_leaves_the_key_as_before_it_existed(
     off = base.replace(photosphere={"network": False})
     text = run_cache.run_config(off).to_toml(comments=False)
     assert "network = false" in text       # the switch is in the configuration ...
-    assert run_key(off.replace(photosphere={"network": False, "supergranule_size": 20 * u.Mm})) == run_key(off)
+    other_size = off.replace(photosphere={"network": False, "supergranule_size": 20 * u.Mm})
+    assert run_key(other_size) == run_key(off)
     assert run_key(off) != run_key(base)   # ... but not in the key while it is off
     # An entry cached before the switch existed (its TOML without the two keys) still reads as the off run's.
     before = "".join(line for line in text.splitlines(keepends=True)
