@@ -7,7 +7,9 @@ column, the nearest and second-nearest centre in the periodic box.  A k-d tree
 answers that at ~0.4 µs per column; the seeds here are spread evenly, so a
 grid of buckets about one seed spacing wide, searched ring by ring around the
 column until no closer seed can remain, gives the same answer (the exact
-minimum-image distances) at a tenth of the cost, in parallel over rows.
+minimum-image distances) at a tenth of the cost, rows in parallel on threads
+(a serial ``nogil`` row kernel: cheaper to compile than a ``parallel=True``
+loop, which a first run would pay for, and the same bits).
 `random_cells` turns them into the cells' walls (also the 3-D Sun's
 supergranules, `gongsynth.sun.model_atmosphere.network_layout`).
 """
@@ -15,6 +17,8 @@ import math
 
 import numba
 import numpy as np
+
+from gongsynth.threads import run_chunks
 
 __all__ = ["nearest_two", "random_cells", "cell_walls"]
 
@@ -29,11 +33,12 @@ def _consider(d2, s, best):
         best[2], best[3] = d2, s
 
 
-@numba.njit(parallel=True, cache=True)
-def _nearest_two_kernel(sx, sy, start, order, nbx, nby, cell_x, cell_y, nx, ny, dx, lx, ly,
-                        d1, d2, i1, i2):
+@numba.njit(cache=True, nogil=True)
+def _nearest_two_rows(row_start, row_stop, sx, sy, start, order, nbx, nby, cell_x, cell_y, nx, dx, lx, ly,
+                      d1, d2, i1, i2):
+    """Rows ``row_start`` to ``row_stop`` of `nearest_two` (each row from its own data only)."""
     n = sx.size
-    for iy in numba.prange(ny):
+    for iy in range(row_start, row_stop):
         best = np.empty(4)
         y = (iy + 0.5) * dx
         by = min(int(y / cell_y), nby - 1)
@@ -121,8 +126,8 @@ def nearest_two(seeds, shape, spacing, box):
     start = np.searchsorted(bucket[order], np.arange(nbx * nby + 1)).astype(np.int64)
     d1, d2 = np.empty(ny * nx), np.empty(ny * nx)
     i1, i2 = np.empty(ny * nx, dtype=np.int64), np.empty(ny * nx, dtype=np.int64)
-    _nearest_two_kernel(np.ascontiguousarray(seeds[:, 0]), np.ascontiguousarray(seeds[:, 1]), start, order,
-                        nbx, nby, cell_x, cell_y, nx, ny, float(spacing), lx, ly, d1, d2, i1, i2)
+    run_chunks(_nearest_two_rows, ny, np.ascontiguousarray(seeds[:, 0]), np.ascontiguousarray(seeds[:, 1]),
+               start, order, nbx, nby, cell_x, cell_y, nx, float(spacing), lx, ly, d1, d2, i1, i2)
     return np.column_stack([d1, d2]), np.column_stack([i1, i2])
 
 
