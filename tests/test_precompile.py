@@ -48,9 +48,10 @@ def test_list_is_the_runs_kernels():
                 if isinstance(value, Dispatcher) and value.py_func.__module__ == module}
 
     before = loads()
-    # The run's builder and transfer on a small grid (the types do not depend on the sizes).
-    synthesize(model_atmosphere((16, 16), pixel_size=384 * u.km, seed=0, nz=16), mu=0.9,
-               azimuth=-90 * u.deg, progress=False)
+    # The run's builder and transfer on a small grid (the types do not depend on the sizes), with the
+    # supergranular network that the default run's 98 Mm box lays (cells small enough for this box).
+    synthesize(model_atmosphere((16, 16), pixel_size=384 * u.km, seed=0, nz=16, network=True,
+                                supergranule_size=3 * u.Mm), mu=0.9, azimuth=-90 * u.deg, progress=False)
     tasks = precompile.load_kernels()
     called = {callee for task in tasks for callee in task["calls"]}
     names = {(module, name) for module, name, _ in _entries(tasks)}
