@@ -42,7 +42,6 @@ cached and what is missing)::
     python scripts/build_default_calibration_table.py --grid run --cache RUNS-256 --overwrite
     python scripts/build_default_calibration_table.py --instrument hmi --cache RUNS-1024 --overwrite
     python scripts/build_default_calibration_table.py --instrument gong --cache RUNS-1024 --overwrite \
-        --members large-umbra small-spot \
         --rst docs/guide/calibration_tables.txt \
         --compare "run grid=gongsynth/data/calibration_run_grid.ecsv" \
                   "HMI, paper grid=gongsynth/data/calibration_hmi.ecsv"
@@ -54,15 +53,17 @@ with ``--no-systematic`` and then given their bands without refitting::
     python scripts/build_default_calibration_table.py --instrument hmi --systematic-only TABLE \
         --out gongsynth/data/calibration_hmi.ecsv --overwrite
     python scripts/build_default_calibration_table.py --grid run --systematic-only TABLE \
-        --members large-umbra small-spot --out gongsynth/data/calibration_run_grid.ecsv --overwrite
+        --out gongsynth/data/calibration_run_grid.ecsv --overwrite
     python scripts/build_default_calibration_table.py --systematic-only TABLE \
-        --members large-umbra small-spot \
         --out gongsynth/data/calibration_default.ecsv --overwrite --rst docs/guide/calibration_tables.txt \
         --compare "run grid=gongsynth/data/calibration_run_grid.ecsv" \
-                  "HMI, paper grid=gongsynth/data/calibration_hmi.ecsv"
+                  "HMI, paper grid=gongsynth/data/calibration_hmi.ecsv" \
+                  "MDI, paper grid=gongsynth/data/calibration_mdi.ecsv"
 
-Same gongsynth version, same seeds: the same numbers, bit for bit (only the
-``created`` date in the metadata differs), whatever the number of workers.
+(MDI's table as HMI's, with ``--instrument mdi``; the tables of the Sun with
+its network were made so, with ``--workers 2``.)  Same gongsynth version,
+same seeds: the same numbers, bit for bit (only the ``created`` date in the
+metadata differs), whatever the number of workers.
 ``--cache DIR`` keeps every run (one FITS file each, `gongsynth.run_cache`,
 named by a hash of its configuration and the gongsynth version): started
 again after an interruption, the build simulates only what is missing.
