@@ -105,7 +105,7 @@ def collect(folder, table_path):
     runs = [json.loads(p.read_text()) for p in sorted(Path(folder).glob("*.json"))]
     if not runs:
         raise SystemExit(f"no run's .json in {folder}")
-    keys = ("ks", "ks_centred", "mean_abs", "noise_box", "noise_difference", "p99", "p999")
+    keys = ("ks", "ks_centred", "mean_abs", "mean_abs_centred", "noise_box", "noise_difference", "p99", "p999")
     rows = [{"run": "real (Big Bear 2009-09-05 18:54)", "effective_area": np.nan, "like_counts": False,
              "effects_off": "", "interpolant": "",
              **{k: runs[0]["numbers"][k][1] if k not in ("ks", "ks_centred") else np.nan for k in keys},
@@ -119,7 +119,7 @@ def collect(folder, table_path):
                      "power_ratio_max": r["power_ratio_5_100"][1]})
     table = QTable(rows=[[row[c] for c in rows[0]] for row in rows], names=list(rows[0]))
     table["effective_area"].unit = u.cm**2
-    for k in ("mean_abs", "noise_box", "noise_difference", "p99", "p999"):
+    for k in ("mean_abs", "mean_abs_centred", "noise_box", "noise_difference", "p99", "p999"):
         table[k].unit = u.G
     table.meta["description"] = ("gongsynth like runs against the real Big Bear GONG map, 9 minutes, seed 1, "
                                  "frame seeing and averaging on; scripts/gong_noise_vs_real.py")

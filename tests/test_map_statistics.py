@@ -76,3 +76,16 @@ def test_matching_the_noise_equalises_pixel_difference_noise_and_ks():
     ax = Figure().add_subplot()
     stats.plot_spectra(ax)
     assert len(ax.get_lines()) == 4 and "power spectrum" in ax.get_title()
+
+
+def test_mean_abs_centred_takes_out_a_zero_point():
+    # A site file's zero point: N(-2.4, 5) on the disk.  |B| is inflated by the offset; |B - median| is
+    # the noise's half-normal mean, 5 sqrt(2/pi) = 3.99 G (n ~ 1e5 pixels: known to ~0.3 %).
+    rng = np.random.default_rng(5)
+    offset, noisy = _map(rng.normal(-2.4, 5, (400, 400))), _map(rng.normal(0, 5, (400, 400)))
+    t = compare_statistics(offset, noisy).table
+    half_normal = 5 * np.sqrt(2 / np.pi)
+    assert t["mean_abs_centred"][0].to_value(u.G) == pytest.approx(half_normal, rel=0.02)
+    assert t["mean_abs_centred"][1].to_value(u.G) == pytest.approx(half_normal, rel=0.02)
+    assert t["mean_abs"][0].to_value(u.G) > 1.1 * half_normal   # E|N(2.4, 5)| = 4.58 G
+    assert "mean |B-median|" in compare_statistics(offset, noisy).summary()

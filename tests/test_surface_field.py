@@ -34,6 +34,7 @@ from gongsynth.sun.surface_field.maps import (
     make_surface_field,
     rotation_drift,
 )
+from gongsynth.sun.surface_field.quiet import QUIET_CORRELATION
 from gongsynth.sun.surface_field.synthetic import active_regions
 
 from .realdata import load_real
@@ -42,6 +43,28 @@ MAXIMUM = "2014-04-01"  # cycle 24 near its maximum: north leading polarity nega
 
 
 # -- the synthetic Sun ------------------------------------------------------------------------
+
+
+def test_the_quiet_field_has_its_width_and_adapts_correlation():
+    # The quiet Sun alone (no regions), within 30 deg of the equator where the polar fields are < 0.02 G.
+    lon, lat = field_grid((360, 720))
+    band = np.abs(lat) < 30
+    lags = np.array([2, 6, 12])                              # deg of longitude (0.5-deg cells)
+    model = np.array([sum(a * np.exp(-0.5 * (r / w) ** 2) for w, a in QUIET_CORRELATION) for r in lags])
+    widths, five_degree, measured = [], [], []
+    for seed in (1, 2, 3):
+        b = synthetic_surface_field("2009-09-05", seed=seed, active_regions_on=False).data[band]
+        b = b - b.mean()
+        widths.append(b.std())
+        measured.append([np.mean(b * np.roll(b, 2 * k, axis=1)) / b.var() for k in lags])
+        five_degree.append(b[:, :720].reshape(b.shape[0], 72, 10).mean(axis=2).std())
+    # ~160 independent 6.5-deg patches in the band: one draw's width and correlations scatter by ~1/sqrt(160)
+    # = 8 % (0.05 in the correlation); the mean of three by ~5 % (0.03).  Tolerances at ~2.5 sigma.
+    assert np.mean(widths) == pytest.approx(3.0, rel=0.12)
+    assert np.allclose(np.mean(measured, axis=0), model, atol=0.08)
+    # Averaged over 5 deg of longitude the field keeps most of its width (ADAPT: 0.95 over 5 x 5 deg);
+    # white 0.5-deg cells would keep 1/sqrt(10) = 0.32.
+    assert np.mean(five_degree) / np.mean(widths) > 0.8
 
 
 def test_same_seed_same_bits_and_the_quiet_sun_is_independent_of_the_regions():

@@ -6,7 +6,8 @@ has degraded the finer one to GONG): the two-sample Kolmogorov-Smirnov
 distance of their on-disk pixel values (as they are and with each map's
 median taken out: a site file's zero point is not the Sun's), the
 quiet-box and pixel-difference noise (`gongsynth.analysis.noise`), the mean
-and the 99th and 99.9th percentiles of |B - median|
+|B| (as measured, and of |B - median|: a zero point of a few G adds to the
+mean |B| of a noisy map as much as a weak field does), the mean and the 99th and 99.9th percentiles of |B - median|
 (`gongsynth.analysis.statistics.tail_percentiles`), the mean |B| in rings
 from disk centre to the limb (`~gongsynth.analysis.statistics.ring_means`)
 and the azimuthally averaged spatial power spectrum of the central region
@@ -135,8 +136,9 @@ class StatisticsComparison:
         One row per map and condition (``map``: "sim", "obs", "sim, noise
         matched", "obs, noise matched"); columns ``noise_added``,
         ``noise_box`` (quietest-box robust sigma), ``noise_difference``,
-        ``mean``, ``median``, ``mean_abs``, ``std``, ``p99``, ``p999`` (99th
-        and 99.9th percentiles of |B - median|), all G; ``ks`` and
+        ``mean``, ``median``, ``mean_abs``, ``mean_abs_centred`` (the mean
+        of |B - median|), ``std``, ``p99``, ``p999`` (99th and 99.9th
+        percentiles of |B - median|), all G; ``ks`` and
         ``ks_centred``: the KS distance between the sim and obs rows of the
         same condition (as they are, and medians removed).
     rings : `~astropy.table.QTable`
@@ -204,7 +206,8 @@ class StatisticsComparison:
                  f"{'matched: sim':>12s}{'obs':>9s}{'ratio':>8s}"]
         for key, name in (("noise_box", "quietest-box noise [G]"),
                           ("noise_difference", "pixel-diff. noise [G]"), ("mean", "disk mean [G]"),
-                          ("mean_abs", "mean |B| [G]"), ("std", "std [G]"),
+                          ("mean_abs", "mean |B| [G]"), ("mean_abs_centred", "mean |B-median| [G]"),
+                          ("std", "std [G]"),
                           ("p99", "99% |B-median| [G]"), ("p999", "99.9% |B-median| [G]")):
             v = t[key].to_value(u.G)
             lines.append(f"{name:26s}{v[0]:9.2f}{v[1]:9.2f}{v[0] / v[1]:8.2f}   "
@@ -283,7 +286,9 @@ def _measure(smap, rho, max_radius, box, ring_edges, edges=None):
         values=values,
         numbers={"noise_box": noise.sigma.to_value(u.G), "noise_difference": noise.difference.to_value(u.G),
                  "mean": float(np.mean(values)), "median": float(np.median(values)),
-                 "mean_abs": float(np.mean(np.abs(values))), "std": float(np.std(values)),
+                 "mean_abs": float(np.mean(np.abs(values))),
+                 "mean_abs_centred": float(np.mean(np.abs(values - np.median(values)))),
+                 "std": float(np.std(values)),
                  "p99": float(tails[99.0]), "p999": float(tails[99.9])},
         rings=rings_of_values(data, rho, ring_edges, u.G),
         spectrum=power_spectrum(smap, box=box, edges=edges))

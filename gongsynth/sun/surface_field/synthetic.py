@@ -35,12 +35,15 @@ A seeded synthetic Sun: active regions of the cycle of the date, their decay, po
      integrated exactly: tan φ(t) = tan φ0 exp(2 u0 t / R☉).
 2. **Polar fields**: `gongsynth.sun.surface_field.cycle.polar_field`
    (10 G at the pole at full strength, sin⁸ latitude).
-3. **Quiet network**: a white Gaussian field, uncorrelated between cells,
-   whose average over 1° × 1° has a standard deviation of 3 G — the robust
-   width of the ADAPT-GONG map of 2017-07-20 within 30° of the equator (2.9 G,
-   ``shared/data/real/PROVENANCE.md``).  It is the floor of the mean |B|
-   (≈ 0.8 × 3 G at 1°, more in smaller cells).  The internetwork's mixed
-   polarities cancel at these scales and add nothing here.
+3. **Quiet large-scale field**: a stationary Gaussian field of standard
+   deviation 3 G — the robust width of the ADAPT-GONG map of 2017-07-20
+   within 30° of the equator (2.9 G, ``shared/data/real/PROVENANCE.md``) —
+   with that band's measured correlation, close to exp(−r / 6.5°): unipolar
+   patches of ~80 Mm (`gongsynth.sun.surface_field.quiet`; the band's width
+   stays 2.8 G averaged over 5°, so it is not white from cell to cell).  The
+   network's imbalance follows it (`gongsynth.sun.surface_field.network`).
+   The internetwork's mixed polarities cancel at these scales and add
+   nothing here.
 
 The cycle phase follows the date unless ``cycle_phase`` is given (a phase in
 the date's own cycle: signs stay the date's).  Everything random comes from
@@ -77,6 +80,7 @@ from gongsynth.sun.surface_field.maps import (
     make_surface_field,
     rotation_drift,
 )
+from gongsynth.sun.surface_field.quiet import quiet_field
 from gongsynth.validation import check_quantity
 
 __all__ = ["REGION_FLUX_RANGE", "FLUX_INDEX", "synthetic_surface_field", "active_regions"]
@@ -259,7 +263,8 @@ def synthetic_surface_field(obstime=None, *, seed, cycle_phase=None, resolution=
     polar_strength : `~astropy.units.Quantity`
         Polar field at the pole at full strength.
     network_rms : `~astropy.units.Quantity`
-        Standard deviation of the network averaged over 1° × 1°.
+        Standard deviation of the quiet large-scale field
+        (`gongsynth.sun.surface_field.quiet`).
     history : `~astropy.units.Quantity`
         How far back active regions are drawn.
 
@@ -295,14 +300,12 @@ def synthetic_surface_field(obstime=None, *, seed, cycle_phase=None, resolution=
         n_regions = regions["age"].size
         data += _region_fields(regions, shape, lon_grid, lat_grid, ROTATION_MODEL)
     data += polar_field(time, lat_grid * u.deg, polar_strength, cycle_phase=phase).to_value(u.G)[:, None]
-    one_degree = (constants.radius * np.pi / 180) ** 2
-    per_cell = network_rms.to_value(u.G) * math.sqrt((one_degree / cell_area(shape)).to_value(u.one))
-    data += per_cell * stage_generator(seed, "surface-field", 1).standard_normal(shape)
+    data += quiet_field(stage_generator(seed, "surface-field", 1), lat_grid, shape, network_rms.to_value(u.G))
     seed_int = root_seed(seed)
     history_lines = [
         f"synthetic Sun (seed {seed_int}): cycle {n} at phase {phase:.3f}, sunspot number {ssn:.1f} (v2)",
         f"{n_regions} active regions emerged in the last {history:g}; polar field {polar_strength:g} at "
-        f"full strength; network {network_rms:g} rms at 1 deg",
+        f"full strength; quiet field {network_rms:g} rms, ADAPT's correlation",
     ]
     extra = {"cycle": int(n), "cycphase": round(float(phase), 6), "ssn": round(float(ssn), 3),
              "nregions": int(n_regions), "seed": str(seed_int), "polarb": float(polar_strength.to_value(u.G)),
