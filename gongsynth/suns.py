@@ -29,8 +29,8 @@ RUN_GRIDS = {"model-atmosphere": {"shape": (256, 256), "pixel_size": 384 * u.km}
 
 #: The built-in Sun of each scene mode when none is named: the 3-D model atmosphere in both, so that
 #: the tiled and full-disk modes show the same Sun.  Over the full disk its patch library
-#: (`gongsynth.stages.scene.library_rt`, on the grid the instrument's pixels need:
-#: `~gongsynth.stages.scene.library_rt.atmosphere_grid`) builds once per machine in ~10-30 s and is
+#: (`gongsynth.stages.scene.library_rt`, on one grid for every instrument:
+#: `~gongsynth.stages.scene.library_rt.atmosphere_grid`) builds once per machine in ~8-30 s and is
 #: cached; ``sun = "milne-eddington"`` keeps the fast toy columns (~6 s).
 DEFAULT_SUNS = {"tiled": "model-atmosphere", "full-disk": "model-atmosphere"}
 

@@ -105,7 +105,8 @@ def collect(folder, table_path):
     runs = [json.loads(p.read_text()) for p in sorted(Path(folder).glob("*.json"))]
     if not runs:
         raise SystemExit(f"no run's .json in {folder}")
-    keys = ("ks", "ks_centred", "mean_abs", "mean_abs_centred", "noise_box", "noise_difference", "p99", "p999")
+    keys = ("ks", "ks_centred", "mean_abs", "mean_abs_centred", "noise_box", "noise_difference", "p99",
+            "p999")
     rows = [{"run": "real (Big Bear 2009-09-05 18:54)", "effective_area": np.nan, "like_counts": False,
              "effects_off": "", "interpolant": "",
              **{k: runs[0]["numbers"][k][1] if k not in ("ks", "ks_centred") else np.nan for k in keys},

@@ -69,7 +69,8 @@ def main():
     along_lon, along_lat = measure()
     mean = 0.5 * (along_lon + along_lat)
     print("lag (deg)       " + " ".join(f"{k:5d}" for k in range(LAGS)))
-    for name, c in (("along longitude", along_lon), ("along latitude ", along_lat), ("mean           ", mean)):
+    rows = (("along longitude", along_lon), ("along latitude ", along_lat), ("mean           ", mean))
+    for name, c in rows:
         print(name + " " + " ".join(f"{v:5.2f}" for v in c))
     weights, worst = fit(mean)
     print("fitted (width deg, weight):", [(w, round(float(a), 3)) for w, a in zip(WIDTHS, weights)],

@@ -479,10 +479,10 @@ def cached_library(*, sun="milne-eddington", progress=False, **arguments):
     The patch library of a built-in Sun, built once per argument set and kept in memory and on disk.
 
     The disk copy (`cache_directory`; ~300 MB for the Milne-Eddington
-    defaults, ~5 MB for GONG's 3-D library) is keyed by the Sun, the
+    defaults, ~17 MB for GONG's 3-D library) is keyed by the Sun, the
     arguments (the Sun's knobs, the instrument's line and filters, and for the
-    3-D Sun the patch grid `~gongsynth.stages.scene.library_rt.atmosphere_grid`
-    gives its pixels), gongsynth's version and the source of every module
+    3-D Sun the patch grid of `~gongsynth.stages.scene.library_rt.atmosphere_grid`),
+    gongsynth's version and the source of every module
     that shapes the numbers (so a code change builds a new one); the patches
     are memory-mapped from it.
 
@@ -491,7 +491,7 @@ def cached_library(*, sun="milne-eddington", progress=False, **arguments):
     sun : {"milne-eddington", "model-atmosphere"}, optional
         `build_library` (Milne-Eddington columns, seconds) or
         `gongsynth.stages.scene.library_rt.build_atmosphere_library` (the 3-D
-        Sun by radiative transfer, ~10-30 s for GONG's full disk).
+        Sun by radiative transfer, ~8-30 s for GONG's full disk).
     progress : bool, optional
         A progress bar while the 3-D library builds (not part of the key).
     **arguments
@@ -514,8 +514,8 @@ def cached_library(*, sun="milne-eddington", progress=False, **arguments):
     elif sun == "model-atmosphere":
         from gongsynth.stages.scene.library_rt import atmosphere_grid, build_atmosphere_library
 
-        # The default grid follows the instrument's pixel (not in the instrument's key): into the key.
-        shape, pixel_size = atmosphere_grid(arguments.get("instrument"))
+        # The default grid, into the key (the same for every instrument: one seed, one Sun).
+        shape, pixel_size = atmosphere_grid()
         arguments = {"shape": shape, "pixel_size": pixel_size, **arguments}
 
         def build():

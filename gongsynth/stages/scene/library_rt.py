@@ -43,20 +43,19 @@ convective blueshift; the renderer leaves out the tabulated one for such a
 library (``meta["spectra_carry_blueshift"]``).
 
 Cost: ~200-400 µs per column and angle on 2 cores (the equation of state
-along every ray dominates).  The full disk does not need the tiled run's
-columns everywhere: its default grid (`atmosphere_grid`) takes columns of
-the tiled run's 384 km, coarsened to at most half the instrument's pixel at
-disk centre (GONG's 2.5″ pixels: 768 km; HMI's 0.5″: 384 km), and patches
-of one surface cell (`gongsynth.stages.scene.fulldisk.DEFAULT_CELL`, 30 Mm:
-40² columns for GONG, 79² for HMI).  GONG's default (4 patches × 1600
-columns × 7 angles) takes ~10-30 s here, once: it is cached like the
-Milne-Eddington library (`gongsynth.stages.scene.library.cached_library`).
-The coarser columns are point samples of the same seeded statistical
-atmosphere (its granulation, elements and internetwork are drawn on the
-grid): a GONG pixel averages ~5 of them instead of ~22 at 384 km, and
-kG elements narrower than a column enter as filling factors, as they do in
-a tiled run's 384 km columns; the validation
-(``benchmarks/validate_library_rt.py``) compares them with 384 km columns.
+along every ray dominates).  The default grid (`atmosphere_grid`) is the same
+for every instrument: the tiled run's 384 km columns and patches of one
+surface cell (`gongsynth.stages.scene.fulldisk.DEFAULT_CELL`, 30 Mm: 79²
+columns), 4 patches × 6241 columns × 7 angles, ~8 s here, once: it is cached
+like the Milne-Eddington library
+(`gongsynth.stages.scene.library.cached_library`).  One grid because the
+builder draws its granulation, elements and internetwork on its grid: a
+coarser grid of the same seed is another Sun (its B_z at z = 0 correlates
+with the 384 km one's, block-averaged, to |r| < 0.05), so GONG's full disk on
+768 km columns (the default until a session measured it) was not the Sun that
+HMI and MDI saw: on the full-disk comparison's 1° Carrington cells the truths
+differed by 7 G rms.  ``benchmarks/validate_library_rt.py`` compares a
+coarser library's spectra with the default's.
 """
 import inspect
 
@@ -101,7 +100,6 @@ ATMOSPHERE_THETA = (0.0, 30.0, 48.0, 61.0, 72.0, 81.0, 87.0)
 TILED_COLUMN = 384 * u.km
 
 # Observer-to-disk-centre distance that turns a plate scale into km at disk centre: 1 au - R_sun.
-_KM_PER_ARCSEC = ((1 * u.au - 695700 * u.km) * (1 * u.arcsec).to_value(u.rad)).to_value(u.km)
 
 _FLOAT = np.float32
 _BUILDER = {name: p.default for name, p in inspect.signature(model_atmosphere).parameters.items()}
@@ -140,19 +138,16 @@ def _strong_column(kind, knobs):
     return atm, strength
 
 
-def atmosphere_grid(instrument=None, cell=DEFAULT_CELL):
+def atmosphere_grid(cell=DEFAULT_CELL):
     """
-    The default patch grid of a 3-D library for an instrument: (shape, pixel_size).
+    The default patch grid of a 3-D library: (shape, pixel_size), the same for every instrument.
 
-    Columns are the tiled run's `TILED_COLUMN` (384 km) times the largest
-    integer that keeps them within half the instrument's pixel at disk centre
-    (at least two columns per pixel and axis, so a pixel still averages
-    several granules and lanes); the patch holds one surface ``cell`` of the
-    full-disk renderer (30 Mm).
+    The tiled run's `TILED_COLUMN` (384 km) and enough of them to hold one
+    surface ``cell`` of the full-disk renderer (30 Mm): one seed is one Sun
+    whichever instrument observes it (see the module docstring).
 
     Parameters
     ----------
-    instrument : `~gongsynth.instruments.base.Instrument` or str, optional
     cell : `~astropy.units.Quantity`, optional
         Patch side to cover (default `gongsynth.stages.scene.fulldisk.DEFAULT_CELL`).
 
@@ -164,13 +159,10 @@ def atmosphere_grid(instrument=None, cell=DEFAULT_CELL):
 
     Examples
     --------
-    >>> atmosphere_grid("gong"), atmosphere_grid("hmi")
-    (((40, 40), <Quantity 768. km>), ((79, 79), <Quantity 384. km>))
+    >>> atmosphere_grid()
+    ((79, 79), <Quantity 384. km>)
     """
-    inst = instruments.get(instrument)
-    pixel_km = inst.plate_scale.to_value(u.arcsec) * _KM_PER_ARCSEC
-    base = TILED_COLUMN.to_value(u.km)
-    column = base * max(1, int(0.5 * pixel_km // base))
+    column = TILED_COLUMN.to_value(u.km)
     n = max(8, int(np.ceil(cell.to_value(u.km) / column)))    # model_atmosphere's smallest box
     return (n, n), column * u.km
 
@@ -188,9 +180,9 @@ def build_atmosphere_library(*, seed=0, shape=None, pixel_size=None,
     seed : int or `numpy.random.SeedSequence`, optional
         Root seed; patch *v* of level *k* uses the stream ``("library", k, v)``.
     shape : (int, int), optional
-        Columns of each patch (default: `atmosphere_grid` of the instrument).
+        Columns of each patch (default: `atmosphere_grid`, 79²).
     pixel_size : `~astropy.units.Quantity`, optional
-        Their size (default: `atmosphere_grid` of the instrument, 768 km for GONG).
+        Their size (default: `atmosphere_grid`, 384 km).
     seeds_per_level : sequence of int, optional
         Patches (independent seeds) of each level of ``levels``.
     theta : sequence of float, optional
@@ -232,7 +224,7 @@ def build_atmosphere_library(*, seed=0, shape=None, pixel_size=None,
     (6, (4, 8, 8, 2), True)
     """
     inst = instruments.get(instrument)
-    grid_shape, grid_pixel = atmosphere_grid(inst)
+    grid_shape, grid_pixel = atmosphere_grid()
     shape = grid_shape if shape is None else shape
     pixel_size = grid_pixel if pixel_size is None else pixel_size
     rt_line = get_line(inst.line if line is None else line)
