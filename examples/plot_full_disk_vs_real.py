@@ -92,8 +92,8 @@ side_by_side(((quiet.magnetogram, "gongsynth, 2009-09-05 18:54, Big Bear"),
 # (`~gongsynth.sun.surface_field.network.SupergranularNetwork`: a 5 G
 # unsigned budget, Parnell et al. 2009's flux distribution, the imbalance of
 # the large-scale field, whose quiet part has the ~80 Mm unipolar patches
-# measured on ADAPT-GONG's quiet band, `gongsynth.sun.surface_field.quiet`).  A 200″ quiet region south of disk centre in each map,
-# on one grey scale:
+# measured on ADAPT-GONG's quiet band, `gongsynth.sun.surface_field.quiet`).
+# A 200″ quiet region south of disk centre in each map, on one grey scale:
 
 box = {"bottom_left": (-100, -450) * u.arcsec, "top_right": (100, -250) * u.arcsec}
 zooms = []
