@@ -142,6 +142,10 @@ def test_the_default_grid_is_in_the_cache_key(tmp_path, monkeypatch, tiny_librar
     # A grid given explicitly is the builder's, whatever the instrument's pixel.
     cached_library(sun="model-atmosphere", instrument=coarse, shape=(8, 8), pixel_size=3 * u.Mm, **args)
     assert len(list(tmp_path.iterdir())) == 2
+    # HMI and MDI (other lines and filters: other entries) are given the same grid as GONG.
+    for name in ("hmi", "mdi"):
+        cached_library(sun="model-atmosphere", instrument=name, **args)
+    assert grids[2:] == [atmosphere_grid()] * 2 and len(list(tmp_path.iterdir())) == 4
     assert grids[1] == ((8, 8), 3 * u.Mm)
 
 
