@@ -8,10 +8,10 @@ median taken out: a site file's zero point is not the Sun's), the
 quiet-box and pixel-difference noise (`gongsynth.analysis.noise`), the mean
 |B| (as measured, and of |B - median|: a zero point of a few G adds to the
 mean |B| of a noisy map as much as a weak field does), the 99th and 99.9th
-percentiles of |B - median| (`gongsynth.analysis.statistics.tail_percentiles`), the mean |B| in rings
-from disk centre to the limb (`~gongsynth.analysis.statistics.ring_means`)
-and the azimuthally averaged spatial power spectrum of the central region
-(`gongsynth.analysis.power_spectrum`).
+percentiles of |B - median| (`gongsynth.analysis.statistics.tail_percentiles`),
+the mean |B| in rings from disk centre to the limb
+(`~gongsynth.analysis.statistics.ring_means`) and the azimuthally averaged
+spatial power spectrum of the central region (`gongsynth.analysis.power_spectrum`).
 
 A seeded Sun and a real map differ in their noise as well as in their Sun;
 the noise fills the core of the histogram, so a KS distance or a mean |B|

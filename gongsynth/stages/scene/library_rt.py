@@ -99,8 +99,6 @@ ATMOSPHERE_THETA = (0.0, 30.0, 48.0, 61.0, 72.0, 81.0, 87.0)
 #: The column size of a tiled run's 3-D Sun (`gongsynth.suns.RUN_GRIDS`): the finest a library takes.
 TILED_COLUMN = 384 * u.km
 
-# Observer-to-disk-centre distance that turns a plate scale into km at disk centre: 1 au - R_sun.
-
 _FLOAT = np.float32
 _BUILDER = {name: p.default for name, p in inspect.signature(model_atmosphere).parameters.items()}
 
