@@ -30,7 +30,7 @@ cells, to read beside the measured one).  Nothing is fitted.
 Usage (several minutes on 2 cores; ``--cache DIR`` keeps the three runs' maps)::
 
     python scripts/fulldisk_cross_calibration.py --out docs/guide/fulldisk_cross_calibration.ecsv \
-        --summary docs/guide/fulldisk_cross_calibration.txt [--cache DIR]
+        --summary docs/guide/fulldisk_cross_calibration.txt [--cache DIR] [--sun S] [--date D]
 """
 import argparse
 import datetime
@@ -180,8 +180,9 @@ def main(argv=None):
     parser.add_argument("--summary", type=Path, help="write the slopes by band (reStructuredText)")
     parser.add_argument("--cache", type=Path, help="keep the runs' maps here (FITS): a rerun reads them")
     parser.add_argument("--sun", help="the full-disk Sun (default: simulate's, e.g. 'model-atmosphere')")
+    parser.add_argument("--date", default=DATE, help=f"the synthetic Sun's date (default {DATE})")
     args = parser.parse_args(argv)
-    table = build_table(progress=True, cache=args.cache, sun=args.sun)
+    table = build_table(date=args.date, progress=True, cache=args.cache, sun=args.sun)
     small = summary(table)
     small.pprint(max_width=-1, max_lines=-1)
     if args.summary:
