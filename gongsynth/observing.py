@@ -38,7 +38,7 @@ __all__ = ["GONG_SITES", "Site", "Ephemeris", "GONGView", "check_site", "site_lo
 
 #: The opt-in effects of the real instrument that a run "like" a real GONG full-disk file switches on
 #: unless told otherwise (with the file's count level, ``like_counts``): together they bring the
-#: simulated noise within 4-12 % of the real map's; the effects alone, at the paper's five times
+#: simulated noise within 0-15 % of the real map's; the effects alone, at the paper's five times
 #: brighter count level, take the noise further from it (the noise guide's Big Bear table).
 AS_OBSERVED_EFFECTS = ("frame_seeing", "minute_average", "image_rotation")
 
