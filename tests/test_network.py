@@ -65,11 +65,31 @@ def test_network_has_power_at_the_supergranular_scale_and_follows_the_large_scal
     assert power[0] > 1.10 * power[1]
 
 
+def test_large_concentrations_spread_no_denser_than_plage():
+    """A concentration that would make its grid cell denser than 300 G spreads, keeping its flux."""
+    lon = lat = np.linspace(-10, 10, 201)                  # 0.1° cells of ~1.2 Mm: 5e19 Mx would be 3 kG
+    kwargs = dict(seed=2, flux_density=1 * u.G, flux_range=(5e19, 1e20) * u.Mx,
+                  ephemeral_flux_density=0 * u.G)
+    zero = np.zeros((lat.size, lon.size))
+    point = SupergranularNetwork(cluster_flux_density=None, **kwargs).on_grid(lon, lat, zero)
+    spread = SupergranularNetwork(**kwargs).on_grid(lon, lat, zero)
+    area = (R_CM * np.radians(0.1)) ** 2 * np.cos(np.radians(lat))[:, None] * np.ones(lon.size)
+    assert np.abs(point).max() > 2000
+    # A Gaussian of 300 G peak averaged over a 1.2 Mm cell (σ ≥ 1.6 Mm): 250-300 G at its centre (the
+    # discrete weights' normalisation may add a few tenths of a per cent).
+    assert 200 < np.abs(spread).max() <= 305
+    # Same places, same signs: the region's signed and unsigned flux are kept (no two clusters meet here).
+    assert np.sum(spread * area) == pytest.approx(np.sum(point * area), rel=1e-9)
+    assert np.sum(np.abs(spread) * area) == pytest.approx(np.sum(np.abs(point) * area), rel=1e-6)
+
+
 def test_bad_parameters():
     with pytest.raises(ValueError, match="flux_range"):
         SupergranularNetwork(flux_range=(1e19, 1e18) * u.Mx)
     with pytest.raises(ValueError, match="coherence"):
         SupergranularNetwork(coherence=2)
+    with pytest.raises(ValueError, match="cluster_flux_density"):
+        SupergranularNetwork(cluster_flux_density=0 * u.G)
     with pytest.raises(ValueError, match="large_scale"):
         SupergranularNetwork().on_grid(LON, LAT, np.zeros((3, 3)))
 

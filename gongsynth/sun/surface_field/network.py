@@ -37,10 +37,17 @@ The ingredients and the numbers behind them (set once, not fitted to any map):
   resolution (`gongsynth.analysis.network_clusters`) on real MDI and HMI
   magnetograms of 2010 and on the Big Bear GONG map of 2009
   (``scripts/network_clusters_vs_real.py``, noise guide): a cut of 3e19 Mx
-  gives too few large clusters on all three (99th percentile 0.5-0.6 of the
-  real for GONG and HMI, power-law index 3.9-4.9 against 2.7-3.0), 1e20 Mx
-  matches them (0.8-1.2, 2.8-3.2), 3e20 and 1e21 give too many (1.1-1.5,
-  2.3-2.8).
+  gives too few large clusters on GONG's and HMI's (99th percentile 0.5-0.6
+  of the real, power-law index 3.9-4.9 against 2.7-3.0; MDI's cannot tell
+  3e19 from 1e20), 1e20 Mx matches all three (0.8-1.2, 2.8-3.2), 3e20 and
+  1e21 give too many (1.1-1.5, 2.3-2.8).
+- **Cluster size**: a concentration is laid in its grid cell unless that
+  would make the cell denser than plage, `CLUSTER_FLUX_DENSITY` (300 G:
+  plage averages 100-300 G over ~1″, Schrijver & Zwaan 2000, *Solar and
+  Stellar Magnetic Activity*, ch. 4, the scene's plage level); a larger one
+  spreads as a Gaussian of that peak flux density, σ = √(Φ / 2π B), about
+  its place (2.3 Mm for 1e20 Mx): a large network cluster is many elements,
+  not one.
 - **Polarity**: the imbalance follows the large-scale field: a concentration
   is positive with probability (1 + f)/2, f = B_r / 5 G clipped to ±1,
   so that the network's mean flux density is the large-scale field's
@@ -72,13 +79,17 @@ from sunpy.sun.constants import radius as solar_radius
 from gongsynth.seeding import as_seed_sequence, stage_generator
 from gongsynth.validation import check_quantity
 
-__all__ = ["SupergranularNetwork", "NETWORK_FLUX_DENSITY", "SUPERGRANULE_SIZE", "EPHEMERAL_FLUX",
+__all__ = ["SupergranularNetwork", "NETWORK_FLUX_DENSITY", "SUPERGRANULE_SIZE", "CLUSTER_FLUX_DENSITY",
+           "EPHEMERAL_FLUX",
            "EPHEMERAL_FLUX_DENSITY", "EPHEMERAL_SEPARATION"]
 
 #: Mean unsigned network flux density over the quiet Sun (see the module docstring).
 NETWORK_FLUX_DENSITY = 5 * u.G
 #: Mean spacing of supergranule centres (Rieutord & Rincon 2010).
 SUPERGRANULE_SIZE = 30 * u.Mm
+#: Densest flux a concentration lays on the grid before it spreads: plage's 100-300 G over ~1″
+#: (Schrijver & Zwaan 2000, ch. 4; the scene's plage level, `gongsynth.stages.scene.library.LEVELS`).
+CLUSTER_FLUX_DENSITY = 300 * u.G
 
 _CENTRES, _FLUXES, _PLACES, _SIGNS, _EPHEMERAL = range(5)
 
@@ -113,6 +124,11 @@ class SupergranularNetwork:
         Gaussian sigma of the lanes about the cell walls (1.5 Mm).
     coherence : float
         Weight in [0, 1] of the cells' own signs in the free part of the polarity (1).
+    cluster_flux_density : `~astropy.units.Quantity` or None
+        Densest mean flux density a concentration lays in one grid cell
+        (`CLUSTER_FLUX_DENSITY`, 300 G); a larger concentration spreads over
+        its neighbours as a Gaussian of this peak.  ``None``: every
+        concentration in one cell.
     ephemeral_flux_density : `~astropy.units.Quantity`
         Unsigned flux density of the ephemeral regions, bipoles inside the
         cells (`EPHEMERAL_FLUX_DENSITY`, 1.5 G; 0: none).  Their fluxes are
@@ -137,6 +153,7 @@ class SupergranularNetwork:
     lane_width: u.Quantity = 1.5 * u.Mm
     coherence: float = 1.0
     ephemeral_flux_density: u.Quantity = EPHEMERAL_FLUX_DENSITY
+    cluster_flux_density: u.Quantity = CLUSTER_FLUX_DENSITY
 
     def __post_init__(self):
         for name, unit in (("cell_size", u.km), ("flux_density", u.G), ("lane_width", u.km)):
@@ -150,6 +167,10 @@ class SupergranularNetwork:
             raise ValueError(f"flux_index must be in (1, 3), got {self.flux_index!r}")
         if not 0 <= float(self.coherence) <= 1:
             raise ValueError(f"coherence must be in [0, 1], got {self.coherence!r}")
+        if self.cluster_flux_density is not None:
+            dense = check_quantity(self.cluster_flux_density, u.G, "cluster_flux_density")
+            if np.ndim(dense) or not dense.value > 0:
+                raise ValueError(f"cluster_flux_density must be a positive scalar or None, got {dense}")
         er = check_quantity(self.ephemeral_flux_density, u.G, "ephemeral_flux_density")
         if np.ndim(er) or not er.value >= 0:
             raise ValueError(f"ephemeral_flux_density must be a scalar >= 0, got {er}")
@@ -233,7 +254,7 @@ class SupergranularNetwork:
         p_positive = 0.5 * (1.0 + f + (1.0 - np.abs(f)) * lean)
         signs = np.where(stage_generator(root, "network", _SIGNS).uniform(size=fluxes.size) < p_positive,
                          1.0, -1.0)
-        flux = np.bincount(where, weights=signs * fluxes, minlength=weight.size).astype(float)
+        flux = self._lay(where, signs * fluxes, area, inside, lat, lon, unique, r_km)
         flux += self._ephemeral(root, centres, points, area, wall, lon, lat, inside, r_km)
         network = np.zeros(field.shape)
         network[inside] = flux / area
@@ -241,6 +262,42 @@ class SupergranularNetwork:
             network[:, -1] = network[:, 0]
         carried = np.where(inside, np.clip(field, -b_net, b_net), 0.0)
         return field - carried + network
+
+    def _lay(self, at, flux, area, inside, lat, lon, unique, r_km):
+        """Signed flux (Mx) per grid point of the region: each concentration at its point, or spread."""
+        if self.cluster_flux_density is None:
+            return np.bincount(at, weights=flux, minlength=area.size).astype(float)
+        densest = self.cluster_flux_density.to_value(u.G)
+        dense = np.abs(flux) > densest * area[at]
+        out = np.bincount(at[~dense], weights=flux[~dense], minlength=area.size).astype(float)
+        if not dense.any():
+            return out
+        rows, cols = np.nonzero(inside)
+        index = -np.ones(inside.shape, dtype=np.int64)
+        index[inside] = np.arange(rows.size)
+        periodic = not unique[-1]                       # 360° with both ends: wrap over lon.size - 1
+        n_lon = lon.size - 1 if periodic else lon.size
+        step_lat = abs(lat[1] - lat[0]) * r_km if lat.size > 1 else math.inf
+        step_lon = abs(lon[1] - lon[0]) * r_km if lon.size > 1 else math.inf
+        for k, phi in zip(at[dense], flux[dense]):
+            i0, j0 = rows[k], cols[k]
+            sigma = math.sqrt(abs(phi) / (2 * math.pi * densest)) / 1e5          # km
+            dx_step = max(step_lon * math.cos(lat[i0]), 1e-9)
+            ki = min(int(math.ceil(3 * sigma / step_lat)), lat.size)
+            kj = min(int(math.ceil(3 * sigma / dx_step)), n_lon // 2)
+            di, dj = np.arange(-ki, ki + 1), np.arange(-kj, kj + 1)
+            i = i0 + di
+            keep_i = (i >= 0) & (i < lat.size)
+            j = (j0 + dj) % n_lon if periodic else j0 + dj
+            keep_j = (j >= 0) & (j < lon.size)
+            i, di, j, dj = i[keep_i], di[keep_i], j[keep_j], dj[keep_j]
+            target = index[i[:, None], j[None, :]]
+            # The Gaussian's flux per area (local tangent plane) times each cell's area.
+            g = np.exp(-0.5 * (((di * step_lat)[:, None]) ** 2 + ((dj * dx_step)[None, :]) ** 2) / sigma ** 2)
+            ok = target >= 0
+            w = g[ok] * area[target[ok]]
+            out += np.bincount(target[ok], weights=phi * w / w.sum(), minlength=area.size)
+        return out
 
     def _ephemeral(self, root, centres, points, area, wall, lon, lat, inside, r_km):
         """Signed flux (Mx) per grid point of the region: bipoles emerging inside the cells."""
