@@ -1,5 +1,5 @@
 """
-The network's flux clusters of real GONG, MDI and HMI maps and of gongsynth's runs of the same dates, at GONG's resolution.
+Network flux clusters of real GONG, MDI and HMI maps and of gongsynth's runs of their dates, at GONG's pixels.
 
 One Sun model seen by three instruments, each against its own real map: if
 the model's network were too weak (or too strong), all three simulated maps
@@ -18,7 +18,8 @@ real maps.  `gongsynth.analysis.network_clusters.network_clusters` measures
 every map the same way: within 0.35 R☉, quiet pixels only, thresholds
 ``--thresholds`` (G).  Writes ``--table`` (ECSV) and prints it::
 
-    python scripts/network_clusters_vs_real.py --cache /tmp/clusters --table docs/guide/network_clusters_vs_real.ecsv
+    python scripts/network_clusters_vs_real.py --cache /tmp/clusters \
+        --table docs/guide/network_clusters_vs_real.ecsv
 
 About 3 minutes of CPU for two seeds on two cores (HMI's 4096² runs are most of it).
 """
@@ -37,7 +38,7 @@ REAL_MAPS = {
 
 
 def simulated(instrument, seed, cache):
-    """The saved magnetogram of gongsynth's run for ``instrument``'s real map (run and saved first if missing)."""
+    """The magnetogram of gongsynth's run for ``instrument``'s real map (run and saved first if missing)."""
     import astropy.units as u
     import sunpy.map
 
@@ -51,9 +52,9 @@ def simulated(instrument, seed, cache):
         if instrument == "gong":
             settings, gong = like_gong(REAL_MAPS["gong"][1])
             settings, effects = as_observed(settings, {}, mode="full-disk", instrument_name=gong.name)
-            config = SimulationConfig(mode="full-disk", duration=9 * u.min, seed=seed, surface_field="synthetic",
-                                      instrument=gong.replace(supersampling=3), effects=Effects(**effects),
-                                      **settings)
+            config = SimulationConfig(mode="full-disk", duration=9 * u.min, seed=seed,
+                                      surface_field="synthetic", instrument=gong.replace(supersampling=3),
+                                      effects=Effects(**effects), **settings)
         else:
             duration = 5 * u.min if instrument == "mdi" else 0.75 * u.min
             config = SimulationConfig(instrument=instrument, mode="full-disk", duration=duration, seed=seed,
@@ -104,7 +105,8 @@ def main(argv=None):
             s = found.summary()
             rows.append({"instrument": instrument, "date": date, "kind": kind, "seed": seed,
                          "threshold": threshold * u.G, "region_area": found.region_area,
-                         "number": s["number"], "number_per_1e4_Mm2": s["number_density"].to_value(u.Mm**-2) * 1e4,
+                         "number": s["number"],
+                         "number_per_1e4_Mm2": s["number_density"].to_value(u.Mm**-2) * 1e4,
                          "flux_density": s["flux_density"], "p50": s["p50"], "p90": s["p90"], "p99": s["p99"],
                          "above_3e19": s["above_index_flux"], "above_1e20": s["above_1e20"],
                          "index": s["index"], "index_error": s["index_error"]})
@@ -115,7 +117,8 @@ def main(argv=None):
     table.meta["gongsynth_version"] = gongsynth.__version__
     args.table.parent.mkdir(parents=True, exist_ok=True)
     table.write(args.table, overwrite=True)
-    for col in ("region_area", "flux_density", "p50", "p90", "p99", "number_per_1e4_Mm2", "index", "index_error"):
+    for col in ("region_area", "flux_density", "p50", "p90", "p99", "number_per_1e4_Mm2", "index",
+                "index_error"):
         table[col].info.format = ".3g"
     table.pprint(max_lines=-1, max_width=-1)
     return table
