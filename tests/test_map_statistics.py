@@ -89,3 +89,27 @@ def test_mean_abs_centred_takes_out_a_zero_point():
     assert t["mean_abs_centred"][1].to_value(u.G) == pytest.approx(half_normal, rel=0.02)
     assert t["mean_abs"][0].to_value(u.G) > 1.1 * half_normal   # E|N(2.4, 5)| = 4.58 G
     assert "mean |B-median|" in compare_statistics(offset, noisy).summary()
+
+
+def test_cluster_columns_are_network_clusters_of_each_map():
+    """The cluster columns are `network_clusters` of each map; a field away from disk centre has NaN."""
+    from gongsynth.analysis.network_clusters import network_clusters
+
+    rng = np.random.default_rng(11)
+    data = [rng.normal(0, 3, (300, 300)) for _ in range(2)]
+    for d, amplitude in zip(data, (60.0, 30.0)):
+        d[rng.integers(20, 280, 40), rng.integers(20, 280, 40)] += amplitude     # one-pixel elements
+    sim, obs = _map(data[0]), _map(data[1])
+    t = compare_statistics(sim, obs).table
+    for row, smap in ((0, sim), (1, obs)):
+        expected = network_clusters(smap).summary()
+        assert t["cluster_density"][row] == expected["number_density"]
+        assert t["cluster_flux_density"][row] == expected["flux_density"]
+        assert t["cluster_p99"][row] == expected["p99"]
+    assert t["cluster_flux_density"][0] > t["cluster_flux_density"][1] > 0 * u.G
+    ref = SkyCoord(600 * u.arcsec, 600 * u.arcsec, frame=frames.Helioprojective, observer="earth",
+                   obstime="2020-06-01T12:00")
+    header = sunpy.map.make_fitswcs_header((100, 100), ref, scale=[2.5, 2.5] * u.arcsec / u.pix, unit=u.G)
+    off = [sunpy.map.Map(d[:100, :100], header) for d in data]
+    t_off = compare_statistics(*off).table
+    assert np.all(np.isnan(t_off["cluster_density"].value)) and np.all(np.isnan(t_off["cluster_index"]))

@@ -10,8 +10,11 @@ quiet-box and pixel-difference noise (`gongsynth.analysis.noise`), the mean
 mean |B| of a noisy map as much as a weak field does), the 99th and 99.9th
 percentiles of |B - median| (`gongsynth.analysis.statistics.tail_percentiles`),
 the mean |B| in rings from disk centre to the limb
-(`~gongsynth.analysis.statistics.ring_means`) and the azimuthally averaged
-spatial power spectrum of the central region (`gongsynth.analysis.power_spectrum`).
+(`~gongsynth.analysis.statistics.ring_means`), the azimuthally averaged
+spatial power spectrum of the central region (`gongsynth.analysis.power_spectrum`)
+and the network's clusters near disk centre: their number and flux per area,
+the 99th percentile of their fluxes and the power-law index of the
+distribution (`gongsynth.analysis.network_clusters`, its defaults).
 
 A seeded Sun and a real map differ in their noise as well as in their Sun;
 the noise fills the core of the histogram, so a KS distance or a mean |B|
@@ -30,6 +33,7 @@ import sunpy.map
 from astropy.table import QTable
 
 from gongsynth.analysis.disk import check_map, disk_coordinates, map_values
+from gongsynth.analysis.network_clusters import network_clusters
 from gongsynth.analysis.noise import noise_estimate
 from gongsynth.analysis.power_spectrum import power_spectrum
 from gongsynth.analysis.statistics import RING_EDGES, rings_of_values, tail_percentiles
@@ -140,7 +144,11 @@ class StatisticsComparison:
         of |B - median|), ``std``, ``p99``, ``p999`` (99th and 99.9th
         percentiles of |B - median|), all G; ``ks`` and
         ``ks_centred``: the KS distance between the sim and obs rows of the
-        same condition (as they are, and medians removed).
+        same condition (as they are, and medians removed); the network's
+        clusters within 0.35 R☉ (`~gongsynth.analysis.network_clusters.network_clusters`):
+        ``cluster_density`` (per Mm²), ``cluster_flux_density`` (G),
+        ``cluster_p99`` (Mx) and ``cluster_index`` (NaN where the map does
+        not reach disk centre).
     rings : `~astropy.table.QTable`
         ``r_inner``, ``r_outer`` (solar radii), ``pixels_sim``, ``pixels_obs``
         and the mean |B| of each map and condition: ``sim``, ``obs``,
@@ -218,6 +226,14 @@ class StatisticsComparison:
         lo, hi = self.spectrum_ratio_range()
         lo_m, hi_m = self.spectrum_ratio_range(matched=True)
         lines.append(f"{'power ratio 5-100 Mm':26s}{lo:9.2f} to {hi:.2f}{'':6s}   {lo_m:12.2f} to {hi_m:.2f}")
+        for key, name, scale in (("cluster_density", "clusters per 1e4 Mm2", 1e4),
+                                 ("cluster_flux_density", "cluster flux / area [G]", 1.0),
+                                 ("cluster_p99", "clusters' 99% [1e19 Mx]", 1e-19),
+                                 ("cluster_index", "cluster index > 3e19 Mx", 1.0)):
+            v = np.asarray(getattr(t[key], "value", t[key]), dtype=float) * scale
+            with np.errstate(invalid="ignore", divide="ignore"):
+                lines.append(f"{name:26s}{v[0]:9.2f}{v[1]:9.2f}{v[0] / v[1]:8.2f}   "
+                             f"{v[2]:12.2f}{v[3]:9.2f}{v[2] / v[3]:8.2f}")
         for r in self.rings:
             lines.append(f"{'mean |B| ' + f'{r['r_inner']:.2f}-{r['r_outer']:.2f} R':26s}"
                          f"{r['sim'].to_value(u.G):9.2f}{r['obs'].to_value(u.G):9.2f}{r['ratio']:8.2f}   "
@@ -282,7 +298,15 @@ def _measure(smap, rho, max_radius, box, ring_edges, edges=None):
         values = data[np.isfinite(data) & (rho < max_radius)]
     noise = quiet_noise(smap)
     tails = tail_percentiles(values)
+    try:
+        clusters = network_clusters(smap).summary()
+    except ValueError:                       # the map does not reach disk centre
+        clusters = {"number_density": np.nan / u.Mm**2, "flux_density": np.nan * u.G,
+                    "p99": np.nan * u.Mx, "index": np.nan}
     return dict(
+        clusters={"cluster_density": clusters["number_density"].to(u.Mm**-2),
+                  "cluster_flux_density": clusters["flux_density"].to(u.G),
+                  "cluster_p99": clusters["p99"].to(u.Mx), "cluster_index": float(clusters["index"])},
         values=values,
         numbers={"noise_box": noise.sigma.to_value(u.G), "noise_difference": noise.difference.to_value(u.G),
                  "mean": float(np.mean(values)), "median": float(np.median(values)),
@@ -362,6 +386,9 @@ def compare_statistics(sim_map, obs_map, *, seed=0, max_radius=0.98, box=640 * u
     table = QTable({k: (v * u.G if k not in ("map",) else v) for k, v in columns.items()})
     table["ks"] = ks
     table["ks_centred"] = ks_centred
+    for key in measured[0]["clusters"]:
+        values = [m["clusters"][key] for m in measured]
+        table[key] = u.Quantity(values) if isinstance(values[0], u.Quantity) else values
 
     names = ("sim", "obs", "sim_matched", "obs_matched")
     r0 = measured[0]["rings"]
