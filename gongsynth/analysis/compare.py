@@ -15,8 +15,9 @@ This module is ``gongsynth.compare``: it also re-exports what a comparison
 uses from its neighbours, the file reading and header checks
 (`gongsynth.analysis.observations`), the statistics (histograms:
 `gongsynth.analysis.statistics`, noise: `gongsynth.analysis.noise`), the limb-darkening curves
-(`gongsynth.analysis.limb`) and `degrade_to_gong`
-(`gongsynth.analysis.degrade`).
+(`gongsynth.analysis.limb`), `degrade_to_gong`
+(`gongsynth.analysis.degrade`) and `network_clusters`
+(`gongsynth.analysis.network_clusters`).
 """
 import json
 import warnings
@@ -39,6 +40,7 @@ from gongsynth.analysis.limb import (
     limb_darkening,
 )
 from gongsynth.analysis.map_statistics import compare_statistics, quiet_noise
+from gongsynth.analysis.network_clusters import network_clusters
 from gongsynth.analysis.noise import disk_centre_level, noise_estimate
 from gongsynth.analysis.observations import BadHeaderWarning, load_observation
 from gongsynth.analysis.power_spectrum import power_spectrum
@@ -62,6 +64,7 @@ __all__ = [
     "compare_files",
     "compare_statistics",
     "power_spectrum",
+    "network_clusters",
     "LimbDarkeningComparison",
     "compare_limb_darkening",
 ]
