@@ -14,7 +14,9 @@ sample with the library's kG elements at the filling that this flux density
 asks for (enhanced network to plage levels on the boundaries, the quiet
 level in the cell interiors), so that light and truth follow the network.
 
-The ingredients and the numbers behind them (set once, not fitted to any map):
+The ingredients and the numbers behind them (set once from published
+statistics; where those leave a range, measured on the real maps of three
+instruments, never fitted to one map):
 
 - **Supergranular cells**: Voronoi cells of random centres on the sphere,
   mean spacing 30 Mm (supergranules are 20-35 Mm across, typically ~30 Mm;
@@ -39,8 +41,9 @@ The ingredients and the numbers behind them (set once, not fitted to any map):
   (``scripts/network_clusters_vs_real.py``, noise guide): a cut of 3e19 Mx
   gives too few large clusters on GONG's and HMI's (99th percentile 0.5-0.6
   of the real, power-law index 3.9-4.9 against 2.7-3.0; MDI's cannot tell
-  3e19 from 1e20), 1e20 Mx matches all three (0.8-1.2, 2.8-3.2), 3e20 and
-  1e21 give too many (1.1-1.5, 2.3-2.8).
+  3e19 from 1e20), 1e20 Mx matches all three (0.8-1.2, 2.8-3.2; with the
+  cluster size below 0.9-1.2, 2.7-3.2), 3e20 and 1e21 give too many
+  (1.1-1.5, 2.3-2.8).
 - **Cluster size**: a concentration is laid in its grid cell unless that
   would make the cell denser than plage, `CLUSTER_FLUX_DENSITY` (300 G:
   plage averages 100-300 G over ~1″, Schrijver & Zwaan 2000, *Solar and
