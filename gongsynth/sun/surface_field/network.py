@@ -276,12 +276,12 @@ class SupergranularNetwork:
         if not dense.any():
             return out
         rows, cols = np.nonzero(inside)
-        index = -np.ones(inside.shape, dtype=np.int64)
-        index[inside] = np.arange(rows.size)
+        index = _region_index(inside)
         periodic = not unique[-1]                       # 360° with both ends: wrap over lon.size - 1
         n_lon = lon.size - 1 if periodic else lon.size
         step_lat = abs(lat[1] - lat[0]) * r_km if lat.size > 1 else math.inf
         step_lon = abs(lon[1] - lon[0]) * r_km if lon.size > 1 else math.inf
+        targets, weights = [], []
         for k, phi in zip(at[dense], flux[dense]):
             i0, j0 = rows[k], cols[k]
             sigma = math.sqrt(abs(phi) / (2 * math.pi * densest)) / 1e5          # km
@@ -299,7 +299,10 @@ class SupergranularNetwork:
             g = np.exp(-0.5 * (((di * step_lat)[:, None]) ** 2 + ((dj * dx_step)[None, :]) ** 2) / sigma ** 2)
             ok = target >= 0
             w = g[ok] * area[target[ok]]
-            out += np.bincount(target[ok], weights=phi * w / w.sum(), minlength=area.size)
+            targets.append(target[ok])
+            weights.append(phi * w / w.sum())
+        # One pass over the grid for all of them, each cell's shares added in the concentrations' order.
+        np.add.at(out, np.concatenate(targets), np.concatenate(weights))
         return out
 
     def _ephemeral(self, root, centres, points, area, wall, lon, lat, inside, r_km):
@@ -323,8 +326,7 @@ class SupergranularNetwork:
         half = 0.5 * EPHEMERAL_SEPARATION.to_value(u.km) / r_km
         offset = half * (np.cos(angle)[:, None] * east + np.sin(angle)[:, None] * north)
         # Each footpoint to its nearest grid point of the region (uniform axes: index arithmetic).
-        index = -np.ones(inside.shape, dtype=np.int64)
-        index[inside] = np.arange(points.shape[0])
+        index = _region_index(inside)
         for sign, foot in ((1.0, p + offset), (-1.0, p - offset)):
             foot /= np.linalg.norm(foot, axis=1)[:, None]
             f_lat = np.arcsin(np.clip(foot[:, 2], -1, 1))
@@ -335,3 +337,10 @@ class SupergranularNetwork:
             keep = k >= 0
             flux += np.bincount(k[keep], weights=sign * phi[keep], minlength=flux.size).astype(float)
         return flux
+
+
+def _region_index(inside):
+    """(nlat, nlon) int: each grid point's index among the region's points (row-major), -1 outside."""
+    index = -np.ones(inside.shape, dtype=np.int64)
+    index[inside] = np.arange(np.count_nonzero(inside))
+    return index
