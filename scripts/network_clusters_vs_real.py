@@ -64,17 +64,6 @@ def simulated(instrument, seed, cache):
     return sunpy.map.Map(path)
 
 
-def at_gong_resolution(smap):
-    """GONG's maps as they are; finer ones through `degrade_to_gong`."""
-    import astropy.units as u
-
-    from gongsynth.analysis.degrade import degrade_to_gong
-
-    if abs(smap.scale.axis1.to_value(u.arcsec / u.pix) - 2.5) < 0.1:
-        return smap
-    return degrade_to_gong(smap)
-
-
 def main(argv=None):
     """Measure the real and simulated maps, write the table."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
@@ -89,6 +78,7 @@ def main(argv=None):
     from astropy.table import QTable
 
     import gongsynth
+    from gongsynth.analysis.degrade import degrade_if_finer
     from gongsynth.analysis.network_clusters import network_clusters
 
     warnings.simplefilter("ignore", category=UserWarning)
@@ -99,7 +89,7 @@ def main(argv=None):
                  for seed in args.seeds]
     rows = []
     for instrument, date, kind, seed, smap in maps:
-        gong_map = at_gong_resolution(smap)
+        gong_map = degrade_if_finer(smap)[0]        # MDI's and HMI's maps; GONG's as they are
         for threshold in args.thresholds:
             found = network_clusters(gong_map, threshold=threshold * u.G)
             s = found.summary()
