@@ -55,6 +55,30 @@ def test_tails_and_rings():
     m = _map(data, scale=16)
     rings = ring_means(m, (0, 0.5, 0.9))
     assert np.allclose(rings["mean_abs"].to_value(u.G), 4.0) and np.all(rings["pixels"] > 0)
+    assert np.all(rings["robust_sigma"].value == 0) and np.all(rings["difference_sigma"].value == 0)
+
+
+def test_ring_width_and_noise_tell_white_noise_from_signal_and_correlated_noise():
+    from scipy.ndimage import uniform_filter
+    rng = np.random.default_rng(5)
+    n, sigma = 400, 3.0
+    white = rng.normal(0, sigma, (n, n))
+    y = np.arange(n)[:, None] * np.ones((1, n))
+    signal = 6 * np.sin(2 * np.pi * y / 80)             # smooth: ~0.2 G between neighbours
+    # 2 x 2 boxcar of white noise of sigma 2 sigma: sigma again, neighbours correlated by 1/2.
+    correlated = uniform_filter(rng.normal(0, 2 * sigma, (n, n)), size=2, mode="wrap")
+    edges = (0, 0.3, 0.6)
+    # Rings of >= 2.8e4 pixels: a robust sigma is known to 1.17 / sqrt(n) < 0.7 %, so 5 % is > 7 of those.
+    flat = ring_means(_map(white, scale=3), edges)
+    assert np.allclose(flat["robust_sigma"].to_value(u.G), sigma, rtol=0.05)
+    assert np.allclose(flat["difference_sigma"].to_value(u.G), sigma, rtol=0.05)
+    structured = ring_means(_map(white + signal, scale=3), edges)
+    assert np.allclose(structured["difference_sigma"].to_value(u.G), sigma, rtol=0.05)
+    assert np.all(structured["robust_sigma"].to_value(u.G) > 1.4 * sigma)
+    smooth = ring_means(_map(correlated, scale=3), edges)
+    assert np.allclose(smooth["robust_sigma"].to_value(u.G), sigma, rtol=0.05)
+    # A neighbour difference of correlated noise has variance 2 sigma^2 (1 - 1/2): sigma / sqrt(2).
+    assert np.allclose(smooth["difference_sigma"].to_value(u.G), sigma / np.sqrt(2), rtol=0.05)
 
 
 def test_matching_the_noise_equalises_pixel_difference_noise_and_ks():

@@ -152,7 +152,11 @@ class StatisticsComparison:
     rings : `~astropy.table.QTable`
         ``r_inner``, ``r_outer`` (solar radii), ``pixels_sim``, ``pixels_obs``
         and the mean |B| of each map and condition: ``sim``, ``obs``,
-        ``sim_matched``, ``obs_matched`` (G), with ``ratio`` and ``ratio_matched`` (sim / obs).
+        ``sim_matched``, ``obs_matched`` (G), with ``ratio`` and ``ratio_matched`` (sim / obs);
+        the robust width (1.4826 × MAD) and the robust pixel-difference noise of each
+        (`~gongsynth.analysis.statistics.ring_means`): ``<map>_width`` and ``<map>_noise`` (G),
+        with ``width_ratio`` and ``width_ratio_matched``.  Where the widths differ more than the
+        noises, the rings differ in weak signal or in noise correlated between pixels.
     spectra : `~astropy.table.QTable`
         ``wavelength`` (Mm) and the power of each map and condition (G² Mm²)
         in the same columns, with ``ratio`` and ``ratio_matched``.
@@ -239,6 +243,18 @@ class StatisticsComparison:
                          f"{r['sim'].to_value(u.G):9.2f}{r['obs'].to_value(u.G):9.2f}{r['ratio']:8.2f}   "
                          f"{r['sim_matched'].to_value(u.G):12.2f}{r['obs_matched'].to_value(u.G):9.2f}"
                          f"{r['ratio_matched']:8.2f}")
+        for r in self.rings:
+            lines.append(f"{'robust σ ' + f'{r['r_inner']:.2f}-{r['r_outer']:.2f} R':26s}"
+                         f"{r['sim_width'].to_value(u.G):9.2f}{r['obs_width'].to_value(u.G):9.2f}"
+                         f"{r['width_ratio']:8.2f}   "
+                         f"{r['sim_matched_width'].to_value(u.G):12.2f}{r['obs_matched_width'].to_value(u.G):9.2f}"
+                         f"{r['width_ratio_matched']:8.2f}")
+        for r in self.rings:
+            lines.append(f"{'diff. noise ' + f'{r['r_inner']:.2f}-{r['r_outer']:.2f} R':26s}"
+                         f"{r['sim_noise'].to_value(u.G):9.2f}{r['obs_noise'].to_value(u.G):9.2f}"
+                         f"{float(r['sim_noise'] / r['obs_noise']):8.2f}   "
+                         f"{r['sim_matched_noise'].to_value(u.G):12.2f}{r['obs_matched_noise'].to_value(u.G):9.2f}"
+                         f"{float(r['sim_matched_noise'] / r['obs_matched_noise']):8.2f}")
         return "\n".join(lines)
 
     def plot_spectra(self, ax, colours=None):
@@ -270,7 +286,7 @@ class StatisticsComparison:
 
     def plot_rings(self, ax, colours=None):
         """
-        Draw the mean |B| in centre-to-limb rings of both maps (dashed: noise matched).
+        Draw the mean |B| in centre-to-limb rings of both maps (dashed: noise matched; dotted: robust width).
 
         Parameters
         ----------
@@ -285,8 +301,10 @@ class StatisticsComparison:
             ax.plot(r, t[key].to_value(u.G), "o-", color=colours[key], ms=3, label=key)
             ax.plot(r, t[key + "_matched"].to_value(u.G), "--", color=colours[key], lw=0.8,
                     label=f"{key}, noise matched")
+            ax.plot(r, t[key + "_width"].to_value(u.G), ":", color=colours[key], lw=1,
+                    label=f"{key}, robust σ")
         ax.set_xlabel("ring distance from disk centre [R☉]", fontsize=8)
-        ax.set_ylabel("mean |B| [G]", fontsize=8)
+        ax.set_ylabel("mean |B|, robust σ [G]", fontsize=8)
         ax.tick_params(labelsize=7)
         ax.set_title("mean |B| by centre-to-limb ring", fontsize=8)
         ax.legend(fontsize=6)
@@ -396,6 +414,9 @@ def compare_statistics(sim_map, obs_map, *, seed=0, max_radius=0.98, box=640 * u
                     "pixels_sim": r0["pixels"], "pixels_obs": measured[1]["rings"]["pixels"]})
     for name, m in zip(names, measured):
         rings[name] = m["rings"]["mean_abs"].to(u.G)
+    for name, m in zip(names, measured):
+        rings[name + "_width"] = m["rings"]["robust_sigma"].to(u.G)
+        rings[name + "_noise"] = m["rings"]["difference_sigma"].to(u.G)
     s0 = measured[0]["spectrum"]
     spectra = QTable({"wavelength": s0.wavelength})
     for name, m in zip(names, measured):
@@ -404,6 +425,9 @@ def compare_statistics(sim_map, obs_map, *, seed=0, max_radius=0.98, box=640 * u
         with np.errstate(invalid="ignore", divide="ignore"):
             t["ratio"] = np.asarray(t["sim"] / t["obs"])
             t["ratio_matched"] = np.asarray(t["sim_matched"] / t["obs_matched"])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        rings["width_ratio"] = np.asarray(rings["sim_width"] / rings["obs_width"])
+        rings["width_ratio_matched"] = np.asarray(rings["sim_matched_width"] / rings["obs_matched_width"])
     spectra.meta["box_pixels"] = (s0.box_pixels, measured[1]["spectrum"].box_pixels)
     spectra.meta["pixel_size"] = (s0.pixel_size, measured[1]["spectrum"].pixel_size)
     return StatisticsComparison(table=table, rings=rings, spectra=spectra)
