@@ -306,8 +306,9 @@ class StatisticsComparison:
         ax.set_xlabel("ring distance from disk centre [R☉]", fontsize=8)
         ax.set_ylabel("mean |B|, robust σ [G]", fontsize=8)
         ax.tick_params(labelsize=7)
-        ax.set_title("mean |B| by centre-to-limb ring", fontsize=8)
-        ax.legend(fontsize=6)
+        ax.set_ylim(bottom=0)
+        ax.set_title("mean |B| and robust σ by centre-to-limb ring", fontsize=8)
+        ax.legend(fontsize=6, ncol=2, loc="lower left")
 
 
 def _measure(smap, rho, max_radius, box, ring_edges, edges=None):
