@@ -99,7 +99,10 @@ _CENTRES, _FLUXES, _PLACES, _SIGNS, _EPHEMERAL = range(5)
 #: Ephemeral regions: mean flux of one polarity (Mx) and unsigned flux density present on the Sun (G).
 #: Hagenaar 2001 (ApJ 555, 448, MDI full disk): mean ER flux 1.1e19 Mx, lifetime ~4.4 h and an
 #: emergence rate of ~5e23 Mx per day over the Sun; rate × lifetime ≈ 9e22 Mx present, 1.5 G over
-#: its 6.1e22 cm² (values as recalled, not checked against the paper this session).
+#: its 6.1e22 cm² (the flux and the rate as recalled).  Checked against the same study's first
+#: report (Hagenaar 2000, BAAS 32, 1.23): lifetime 4.4 h and (1-2)e4 ERs on a quarter of the Sun in
+#: 3.5 days, i.e. 2100-4200 present on the Sun, 0.75-1.5 G at 2 × 1.1e19 Mx each: 1.5 G is the top
+#: of that range.
 EPHEMERAL_FLUX = 1.1e19 * u.Mx
 EPHEMERAL_FLUX_DENSITY = 1.5 * u.G
 #: Footpoint separation of an ephemeral region (chosen: young ERs are 5-10 Mm across).
