@@ -19,55 +19,23 @@ Writes an ECSV table (one row per map, kind and ring)::
 
     python scripts/limb_signal_vs_real.py --cache runs --table docs/guide/limb_signal_vs_real.ecsv
 
-Takes about 1-2 minutes on two cores (the runs are cached in ``--cache``).
+Takes about 1-2 minutes on two cores.  The runs are those of
+``scripts/network_clusters_vs_real.py`` (its ``simulated``, the same cache).
 """
 import argparse
-import os
+import sys
 import warnings
 from pathlib import Path
 
-REAL = Path(os.environ.get("GONGSYNTH_REAL_DATA", Path(__file__).resolve().parents[2] / "shared" / "data"
-                           / "real"))
-REAL_MAPS = {
-    "gong": ("2009-09-05T18:54", REAL / "gong" / "bbbqa090905t1854.fits.gz"),
-    "mdi": ("2010-10-15T00:00", REAL / "mdi" / "mdi.fd_m_96m_lev182.20101015_000000_TAI.data.fits"),
-}
-
-
-def simulated(instrument, seed, cache):
-    """The magnetogram and truth ⊗ PSF of gongsynth's run for ``instrument``'s real map (cached)."""
-    import astropy.units as u
-    import sunpy.map
-
-    paths = {kind: Path(cache) / f"{instrument}_seed{seed}_{kind}.fits"
-             for kind in ("magnetogram", "truth_psf")}
-    if not all(p.exists() for p in paths.values()):
-        import gongsynth
-        from gongsynth.config import Effects, SimulationConfig
-        from gongsynth.observing import as_observed, like_gong
-
-        date, real = REAL_MAPS[instrument]
-        if instrument == "gong":
-            settings, gong = like_gong(real)
-            settings, effects = as_observed(settings, {}, mode="full-disk", instrument_name=gong.name)
-            config = SimulationConfig(mode="full-disk", duration=9 * u.min, seed=seed,
-                                      surface_field="synthetic", instrument=gong.replace(supersampling=3),
-                                      effects=Effects(**effects), **settings)
-        else:
-            config = SimulationConfig(instrument=instrument, mode="full-disk", duration=5 * u.min, seed=seed,
-                                      obstime=date, surface_field="synthetic")
-        result = gongsynth.simulate(config=config, progress=False)
-        Path(cache).mkdir(parents=True, exist_ok=True)
-        result.magnetogram.save(paths["magnetogram"], overwrite=True)
-        result.truth_psf.save(paths["truth_psf"], overwrite=True)
-    return {kind: sunpy.map.Map(p) for kind, p in paths.items()}
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from network_clusters_vs_real import real_and_simulated_maps  # noqa: E402  (the same runs and cache)
 
 
 def main(argv=None):
     """Measure the rings of the real and simulated maps, write the table."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
-    parser.add_argument("--cache", type=Path, default=Path("limb_signal_runs"),
-                        help="folder of the simulated maps (made if missing)")
+    parser.add_argument("--cache", type=Path, default=Path("network_clusters_runs"),
+                        help="folder of the simulated maps (made if missing; network_clusters_vs_real.py's)")
     parser.add_argument("--seeds", type=int, nargs="+", default=[1, 2])
     parser.add_argument("--table", type=Path, required=True, help="ECSV file to write")
     args = parser.parse_args(argv)
@@ -81,13 +49,7 @@ def main(argv=None):
     from gongsynth.analysis.statistics import ring_means
 
     warnings.simplefilter("ignore", category=UserWarning)
-    maps = []
-    for instrument, (date, path) in REAL_MAPS.items():
-        maps.append((instrument, date, "real", -1, gongsynth.load_observation(path)))
-        for seed in args.seeds:
-            runs = simulated(instrument, seed, args.cache)
-            maps += [(instrument, date, "simulated", seed, runs["magnetogram"]),
-                     (instrument, date, "truth_psf", seed, runs["truth_psf"])]
+    maps = real_and_simulated_maps(args.seeds, args.cache, instruments=("gong", "mdi"), truth=True)
     tables = []
     for instrument, date, kind, seed, smap in maps:
         rings = ring_means(degrade_if_finer(smap)[0])      # MDI's maps at GONG's pixels; GONG's as they are

@@ -38,12 +38,17 @@ REAL_MAPS = {
 
 
 def simulated(instrument, seed, cache):
-    """The magnetogram of gongsynth's run for ``instrument``'s real map (run and saved first if missing)."""
+    """
+    The run of ``instrument``'s real map: its magnetogram and truth ⊗ PSF (run and saved first if missing).
+
+    Also used by ``scripts/limb_signal_vs_real.py`` (the same runs, the same cache).
+    """
     import astropy.units as u
     import sunpy.map
 
-    path = Path(cache) / f"{instrument}_seed{seed}.fits"
-    if not path.exists():
+    paths = {"magnetogram": Path(cache) / f"{instrument}_seed{seed}.fits",
+             "truth_psf": Path(cache) / f"{instrument}_seed{seed}_truth_psf.fits"}
+    if not all(p.exists() for p in paths.values()):
         import gongsynth
         from gongsynth.config import Effects, SimulationConfig
         from gongsynth.observing import as_observed, like_gong
@@ -59,9 +64,32 @@ def simulated(instrument, seed, cache):
             duration = 5 * u.min if instrument == "mdi" else 0.75 * u.min
             config = SimulationConfig(instrument=instrument, mode="full-disk", duration=duration, seed=seed,
                                       obstime=date, surface_field="synthetic")
-        path.parent.mkdir(parents=True, exist_ok=True)
-        gongsynth.simulate(config=config, progress=False).magnetogram.save(path)
-    return sunpy.map.Map(path)
+        Path(cache).mkdir(parents=True, exist_ok=True)
+        result = gongsynth.simulate(config=config, progress=False)
+        for kind, path in paths.items():
+            getattr(result, kind).save(path, overwrite=True)
+    return {kind: sunpy.map.Map(path) for kind, path in paths.items()}
+
+
+def real_and_simulated_maps(seeds, cache, instruments=tuple(REAL_MAPS), truth=False):
+    """
+    (instrument, date, kind, seed, map) of each real map and of gongsynth's runs of its date.
+
+    ``kind`` is "real" (seed -1), "simulated" and, with ``truth``, "truth_psf" (the runs' noise-free
+    truth through the PSF).
+    """
+    import gongsynth
+
+    maps = []
+    for instrument in instruments:
+        date, path = REAL_MAPS[instrument]
+        maps.append((instrument, date, "real", -1, gongsynth.load_observation(path)))
+        for seed in seeds:
+            runs = simulated(instrument, seed, cache)
+            maps.append((instrument, date, "simulated", seed, runs["magnetogram"]))
+            if truth:
+                maps.append((instrument, date, "truth_psf", seed, runs["truth_psf"]))
+    return maps
 
 
 def main(argv=None):
@@ -82,13 +110,8 @@ def main(argv=None):
     from gongsynth.analysis.network_clusters import network_clusters
 
     warnings.simplefilter("ignore", category=UserWarning)
-    maps = []
-    for instrument, (date, path) in REAL_MAPS.items():
-        maps.append((instrument, date, "real", -1, gongsynth.load_observation(path)))
-        maps += [(instrument, date, "simulated", seed, simulated(instrument, seed, args.cache))
-                 for seed in args.seeds]
     rows = []
-    for instrument, date, kind, seed, smap in maps:
+    for instrument, date, kind, seed, smap in real_and_simulated_maps(args.seeds, args.cache):
         gong_map = degrade_if_finer(smap)[0]        # MDI's and HMI's maps; GONG's as they are
         for threshold in args.thresholds:
             found = network_clusters(gong_map, threshold=threshold * u.G)
