@@ -33,6 +33,28 @@ def test_spectrum_of_a_plane_wave_peaks_at_its_wavelength_with_its_variance():
     assert spectrum.variance.to_value(u.G ** 2) == pytest.approx(50, rel=0.02)
 
 
+def test_spectrum_of_a_box_off_centre_sees_only_that_box():
+    n = 512                                   # 1280″ at 2.5″: four 640″ quadrants
+    m = _map(np.zeros((n, n)))
+    dx = (2.5 * u.arcsec * km_per_arcsec(m)).to_value(u.Mm)
+    wavelength = 256 * dx / 8                 # 8 whole periods across a quadrant
+    x = np.arange(256) * dx
+    data = np.zeros((n, n))
+    data[256:, 256:] = 10 * np.cos(2 * np.pi * x / wavelength)[None, :]     # the north-west quadrant only
+    wave = _map(data)
+    inside = power_spectrum(wave, offset=[320, 320] * u.arcsec)
+    outside = power_spectrum(wave, offset=[-320, -320] * u.arcsec)
+    assert inside.box_pixels == outside.box_pixels == 256
+    k = inside.edges.to_value(1 / u.Mm)
+    peak = int(np.nanargmax(inside.power.value))
+    assert k[peak] <= 1 / wavelength < k[peak + 1]
+    # Parseval with the window taken out: A²/2 = 50 (the box is the quadrant to half a pixel).
+    assert inside.variance.to_value(u.G ** 2) == pytest.approx(50, rel=0.02)
+    assert outside.variance.to_value(u.G ** 2) == 0
+    with pytest.raises(ValueError, match="offset"):
+        power_spectrum(wave, offset=[1, 2, 3] * u.arcsec)
+
+
 def test_spectrum_of_white_noise_is_flat_at_sigma_squared_dx_squared():
     n = 256
     noise = _map(np.random.default_rng(7).normal(0, 3, (n, n)))

@@ -24,7 +24,13 @@ import astropy.units as u
 import numpy as np
 from astropy.table import QTable
 
-from gongsynth.analysis.disk import check_map, disk_centre_pixel, local_pixel_scale, map_values
+from gongsynth.analysis.disk import (
+    check_map,
+    disk_centre_pixel,
+    helioprojective_to_pixel,
+    local_pixel_scale,
+    map_values,
+)
 from gongsynth.validation import check_quantity
 
 __all__ = ["PowerSpectrum", "power_spectrum", "km_per_arcsec"]
@@ -119,9 +125,9 @@ def km_per_arcsec(smap):
     return near * (1 * u.arcsec).to_value(u.rad) / u.arcsec
 
 
-def power_spectrum(smap, *, box=640 * u.arcsec, bins=16, edges=None):
+def power_spectrum(smap, *, box=640 * u.arcsec, bins=16, edges=None, offset=None):
     """
-    Azimuthally averaged spatial power spectrum of the central ``box`` of a map.
+    Azimuthally averaged spatial power spectrum of the central ``box`` of a map (or of one off centre).
 
     Parameters
     ----------
@@ -140,6 +146,12 @@ def power_spectrum(smap, *, box=640 * u.arcsec, bins=16, edges=None):
         The annuli's wavenumber edges instead (1/length, increasing), e.g.
         another map's ``spectrum.edges`` to compare the two annulus by annulus;
         annuli beyond this map's Nyquist wavenumber hold no mode (NaN).
+    offset : `~astropy.units.Quantity`, optional
+        Helioprojective (Tx, Ty) of the box's centre, an angle from disk
+        centre (default: the box on disk centre); the box stays aligned with
+        the pixels and is cut to what the map holds.  Distances stay those at
+        disk centre: a box off centre is foreshortened toward the limb, the
+        same way on any two maps compared.
 
     Returns
     -------
@@ -175,6 +187,14 @@ def power_spectrum(smap, *, box=640 * u.arcsec, bins=16, edges=None):
     ny, nx = data.shape
     cx, cy = disk_centre_pixel(smap)
     scale = local_pixel_scale(smap).to_value(u.arcsec)
+    if offset is not None:
+        shift = np.asarray(check_quantity(offset, u.arcsec, "offset").to_value(u.arcsec), dtype=float)
+        if shift.shape != (2,) or not np.all(np.isfinite(shift)):
+            raise ValueError(f"offset must be a finite (x, y) angle, got {offset}")
+        x, y = helioprojective_to_pixel(smap, shift[0], shift[1])
+        cx, cy = float(x[0]), float(y[0])
+        if not (np.isfinite(cx) and np.isfinite(cy)):
+            raise ValueError(f"offset {offset} is not a point of this map")
     n = int(round(side / scale))
     x0, y0 = int(round(cx - n / 2)), int(round(cy - n / 2))
     x0, y0 = max(x0, 0), max(y0, 0)
