@@ -121,7 +121,29 @@ def test_matching_the_noise_equalises_pixel_difference_noise_and_ks():
     from matplotlib.figure import Figure
     ax = Figure().add_subplot()
     stats.plot_spectra(ax)
-    assert len(ax.get_lines()) == 4 and "power spectrum" in ax.get_title()
+    assert len(ax.get_lines()) == 4 and "power spectrum" in ax.get_title()   # no room for 4 boxes here
+    assert np.all(np.isnan(stats.spectra["ratio_quadrants"]))
+    assert np.isnan(stats.spectrum_ratio_range(quadrants=True)[0])
+
+
+def test_four_boxes_spectrum_agrees_for_one_law_and_is_drawn():
+    rng = np.random.default_rng(12)
+    a, b = _map(rng.normal(0, 3, (560, 560))), _map(rng.normal(0, 3, (560, 560)))   # 1400″ hold 2 x 640″
+    stats = compare_statistics(a, b)
+    t = stats.spectra
+    quad = np.asarray(t["ratio_quadrants"])
+    lam = t["wavelength"].to_value(u.Mm)
+    small = np.isfinite(quad) & (lam < 10)
+    assert small.sum() >= 3
+    # Below 10 Mm each annulus holds >= 3600 modes per box (half of them independent): one box's mean
+    # power is known to ~2.3 % (~3.4 % with the Hann window's neighbours correlated), four boxes' to
+    # ~1.7 %, the ratio of two maps' to ~2.4 %: 12 % is five of those.
+    assert np.all(np.abs(quad[small] - 1) < 0.12)
+    assert np.isfinite(stats.spectrum_ratio_range(quadrants=True)[0])
+    from matplotlib.figure import Figure
+    ax = Figure().add_subplot()
+    stats.plot_spectra(ax)
+    assert len(ax.get_lines()) == 6
 
 
 def test_mean_abs_centred_takes_out_a_zero_point():

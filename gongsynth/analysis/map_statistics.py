@@ -32,7 +32,13 @@ import scipy.stats
 import sunpy.map
 from astropy.table import QTable
 
-from gongsynth.analysis.disk import check_map, disk_coordinates, map_values
+from gongsynth.analysis.disk import (
+    check_map,
+    disk_centre_pixel,
+    disk_coordinates,
+    local_pixel_scale,
+    map_values,
+)
 from gongsynth.analysis.network_clusters import network_clusters
 from gongsynth.analysis.noise import noise_estimate
 from gongsynth.analysis.power_spectrum import power_spectrum
@@ -159,7 +165,13 @@ class StatisticsComparison:
         noises, the rings differ in weak signal or in noise correlated between pixels.
     spectra : `~astropy.table.QTable`
         ``wavelength`` (Mm) and the power of each map and condition (G² Mm²)
-        in the same columns, with ``ratio`` and ``ratio_matched``.
+        in the same columns, with ``ratio`` and ``ratio_matched``; the same
+        for the mean spectrum of the four boxes that tile the central square of
+        twice the side (``<map>_quadrants``, ``ratio_quadrants``,
+        ``ratio_quadrants_matched``; NaN where a map does not hold them): one
+        640″ box holds few supergranules, and its spectrum at network scales
+        strays by a factor ~1.4 from one map of the same Sun to the next
+        (``scripts/power_spectrum_seeds.py``), four boxes by ~1.15.
     """
 
     table: QTable
@@ -184,7 +196,7 @@ class StatisticsComparison:
         i = _ROWS.index(name)
         return {key: self.table[key][i] for key in self.table.colnames if key != "map"}
 
-    def spectrum_ratio_range(self, band=SPECTRUM_BAND, *, matched=False):
+    def spectrum_ratio_range(self, band=SPECTRUM_BAND, *, matched=False, quadrants=False):
         """
         Smallest and largest sim/obs power ratio over the annuli whose wavelengths lie in ``band``.
 
@@ -194,6 +206,9 @@ class StatisticsComparison:
             Wavelength range (default 5-100 Mm).
         matched : bool
             With the noise matched.
+        quadrants : bool
+            The mean spectrum of the four boxes that tile the central square of twice the side
+            instead of the central box's (NaN if the maps do not hold them).
 
         Returns
         -------
@@ -201,7 +216,8 @@ class StatisticsComparison:
         """
         lam = self.spectra["wavelength"].to_value(u.Mm)
         keep = (lam >= band[0].to_value(u.Mm)) & (lam <= band[1].to_value(u.Mm))
-        ratio = np.asarray(self.spectra["ratio_matched" if matched else "ratio"])[keep]
+        key = "ratio_quadrants" if quadrants else "ratio"
+        ratio = np.asarray(self.spectra[key + "_matched" if matched else key])[keep]
         ratio = ratio[np.isfinite(ratio)]
         return (float(ratio.min()), float(ratio.max())) if ratio.size else (np.nan, np.nan)
 
@@ -230,6 +246,9 @@ class StatisticsComparison:
         lo, hi = self.spectrum_ratio_range()
         lo_m, hi_m = self.spectrum_ratio_range(matched=True)
         lines.append(f"{'power ratio 5-100 Mm':26s}{lo:9.2f} to {hi:.2f}{'':6s}   {lo_m:12.2f} to {hi_m:.2f}")
+        lo, hi = self.spectrum_ratio_range(quadrants=True)
+        lo_m, hi_m = self.spectrum_ratio_range(matched=True, quadrants=True)
+        lines.append(f"{'power ratio, 4 boxes':26s}{lo:9.2f} to {hi:.2f}{'':6s}   {lo_m:12.2f} to {hi_m:.2f}")
         for key, name, scale in (("cluster_density", "clusters per 1e4 Mm2", 1e4),
                                  ("cluster_flux_density", "cluster flux / area [G]", 1.0),
                                  ("cluster_p99", "clusters' 99% [1e19 Mx]", 1e-19),
@@ -259,7 +278,7 @@ class StatisticsComparison:
 
     def plot_spectra(self, ax, colours=None):
         """
-        Draw both maps' spatial power spectra (solid) and with the noise matched (dashed).
+        Draw both maps' spatial power spectra (solid), with the noise matched (dashed) and of 4 boxes (dotted).
 
         Parameters
         ----------
@@ -274,6 +293,9 @@ class StatisticsComparison:
             ax.loglog(lam, t[key].value, color=colours[key], label=key)
             ax.loglog(lam, t[key + "_matched"].value, color=colours[key], ls="--", lw=0.8,
                       label=f"{key}, noise matched")
+            quadrants = t[key + "_quadrants"].value
+            if np.isfinite(quadrants).any():
+                ax.loglog(lam, quadrants, color=colours[key], ls=":", lw=1, label=f"{key}, 4 boxes")
         lo, hi = (b.to_value(u.Mm) for b in SPECTRUM_BAND)
         ax.axvspan(lo, hi, color="0.92", zorder=0)
         ax.invert_xaxis()
@@ -317,6 +339,7 @@ def _measure(smap, rho, max_radius, box, ring_edges, edges=None):
         values = data[np.isfinite(data) & (rho < max_radius)]
     noise = quiet_noise(smap)
     tails = tail_percentiles(values)
+    spectrum = power_spectrum(smap, box=box, edges=edges)
     try:
         clusters = network_clusters(smap).summary()
     except ValueError:                       # the map does not reach disk centre
@@ -334,7 +357,28 @@ def _measure(smap, rho, max_radius, box, ring_edges, edges=None):
                  "std": float(np.std(values)),
                  "p99": float(tails[99.0]), "p999": float(tails[99.9])},
         rings=rings_of_values(data, rho, ring_edges, u.G),
-        spectrum=power_spectrum(smap, box=box, edges=edges))
+        spectrum=spectrum,
+        quadrants=_quadrant_power(smap, box, spectrum))
+
+
+def _quadrant_power(smap, box, central):
+    """
+    Mean power of the four ``box`` squares tiling the central square of twice the side (NaN if off the map).
+
+    One box holds few supergranules: its spectrum at network scales strays by a factor ~1.4 from one
+    map to the next (``scripts/power_spectrum_seeds.py``); four boxes halve that.
+    """
+    unit = u.G ** 2 * u.Mm ** 2
+    cx, cy = disk_centre_pixel(smap)
+    n = central.box_pixels
+    ny, nx = smap.data.shape
+    if n != int(round(box.to_value(u.arcsec) / local_pixel_scale(smap).to_value(u.arcsec))) or \
+            min(cx - n, cy - n) < -0.5 or cx + n > nx - 0.5 or cy + n > ny - 0.5:
+        return np.full(central.power.size, np.nan) * unit
+    half = box / 2
+    powers = [power_spectrum(smap, box=box, edges=central.edges, offset=u.Quantity([sx * half, sy * half]))
+              .power.to_value(unit) for sx in (-1, 1) for sy in (-1, 1)]
+    return np.mean(powers, axis=0) * unit
 
 
 def compare_statistics(sim_map, obs_map, *, seed=0, max_radius=0.98, box=640 * u.arcsec,
@@ -422,11 +466,16 @@ def compare_statistics(sim_map, obs_map, *, seed=0, max_radius=0.98, box=640 * u
     spectra = QTable({"wavelength": s0.wavelength})
     for name, m in zip(names, measured):
         spectra[name] = m["spectrum"].power.to(u.G ** 2 * u.Mm ** 2)
+    for name, m in zip(names, measured):
+        spectra[name + "_quadrants"] = m["quadrants"]
     for t in (rings, spectra):
         with np.errstate(invalid="ignore", divide="ignore"):
             t["ratio"] = np.asarray(t["sim"] / t["obs"])
             t["ratio_matched"] = np.asarray(t["sim_matched"] / t["obs_matched"])
     with np.errstate(invalid="ignore", divide="ignore"):
+        spectra["ratio_quadrants"] = np.asarray(spectra["sim_quadrants"] / spectra["obs_quadrants"])
+        spectra["ratio_quadrants_matched"] = np.asarray(spectra["sim_matched_quadrants"]
+                                                        / spectra["obs_matched_quadrants"])
         rings["width_ratio"] = np.asarray(rings["sim_width"] / rings["obs_width"])
         rings["width_ratio_matched"] = np.asarray(rings["sim_matched_width"] / rings["obs_matched_width"])
     spectra.meta["box_pixels"] = (s0.box_pixels, measured[1]["spectrum"].box_pixels)
