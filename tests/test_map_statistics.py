@@ -7,7 +7,7 @@ from astropy.coordinates import SkyCoord
 from sunpy.coordinates import frames
 
 from gongsynth.analysis.map_statistics import compare_statistics, match_noise
-from gongsynth.analysis.power_spectrum import km_per_arcsec, power_spectrum
+from gongsynth.analysis.power_spectrum import km_per_arcsec, power_spectrum, quadrant_power_spectrum
 from gongsynth.analysis.statistics import pixel_difference_sigma, ring_means, tail_percentiles
 
 
@@ -53,6 +53,12 @@ def test_spectrum_of_a_box_off_centre_sees_only_that_box():
     assert outside.variance.to_value(u.G ** 2) == 0
     with pytest.raises(ValueError, match="offset"):
         power_spectrum(wave, offset=[1, 2, 3] * u.arcsec)
+    # The four quadrants' mean: one of four boxes holds the wave.
+    four = quadrant_power_spectrum(wave)
+    assert four.box_pixels == 256 and np.all(four.modes == 4 * power_spectrum(wave).modes)
+    assert four.variance.to_value(u.G ** 2) == pytest.approx(50 / 4, rel=0.02)
+    with pytest.raises(ValueError, match="central"):
+        quadrant_power_spectrum(_map(np.zeros((400, 400))))          # 1000″ cannot hold 2 x 640″
 
 
 def test_spectrum_of_white_noise_is_flat_at_sigma_squared_dx_squared():

@@ -34,14 +34,12 @@ from astropy.table import QTable
 
 from gongsynth.analysis.disk import (
     check_map,
-    disk_centre_pixel,
     disk_coordinates,
-    local_pixel_scale,
     map_values,
 )
 from gongsynth.analysis.network_clusters import network_clusters
 from gongsynth.analysis.noise import noise_estimate
-from gongsynth.analysis.power_spectrum import power_spectrum
+from gongsynth.analysis.power_spectrum import power_spectrum, quadrant_power_spectrum
 from gongsynth.analysis.statistics import RING_EDGES, rings_of_values, tail_percentiles
 
 __all__ = ["StatisticsComparison", "compare_statistics", "match_noise", "quiet_noise", "SPECTRUM_BAND"]
@@ -278,7 +276,7 @@ class StatisticsComparison:
 
     def plot_spectra(self, ax, colours=None):
         """
-        Draw both maps' spatial power spectra (solid), with the noise matched (dashed) and of 4 boxes (dotted).
+        Draw both maps' power spectra (solid), with the noise matched (dashed) and of 4 boxes (dotted).
 
         Parameters
         ----------
@@ -358,27 +356,15 @@ def _measure(smap, rho, max_radius, box, ring_edges, edges=None):
                  "p99": float(tails[99.0]), "p999": float(tails[99.9])},
         rings=rings_of_values(data, rho, ring_edges, u.G),
         spectrum=spectrum,
-        quadrants=_quadrant_power(smap, box, spectrum))
+        quadrants=_quadrant_power(smap, box, spectrum.edges))
 
 
-def _quadrant_power(smap, box, central):
-    """
-    Mean power of the four ``box`` squares tiling the central square of twice the side (NaN if off the map).
-
-    One box holds few supergranules: its spectrum at network scales strays by a factor ~1.4 from one
-    map to the next (``scripts/power_spectrum_seeds.py``); four boxes halve that.
-    """
-    unit = u.G ** 2 * u.Mm ** 2
-    cx, cy = disk_centre_pixel(smap)
-    n = central.box_pixels
-    ny, nx = smap.data.shape
-    if n != int(round(box.to_value(u.arcsec) / local_pixel_scale(smap).to_value(u.arcsec))) or \
-            min(cx - n, cy - n) < -0.5 or cx + n > nx - 0.5 or cy + n > ny - 0.5:
-        return np.full(central.power.size, np.nan) * unit
-    half = box / 2
-    powers = [power_spectrum(smap, box=box, edges=central.edges, offset=u.Quantity([sx * half, sy * half]))
-              .power.to_value(unit) for sx in (-1, 1) for sy in (-1, 1)]
-    return np.mean(powers, axis=0) * unit
+def _quadrant_power(smap, box, edges):
+    """`quadrant_power_spectrum`'s power (G² Mm²) on ``edges``, NaN where the map does not hold the boxes."""
+    try:
+        return quadrant_power_spectrum(smap, box=box, edges=edges).power.to(u.G ** 2 * u.Mm ** 2)
+    except ValueError:
+        return np.full(edges.size - 1, np.nan) * u.G ** 2 * u.Mm ** 2
 
 
 def compare_statistics(sim_map, obs_map, *, seed=0, max_radius=0.98, box=640 * u.arcsec,
