@@ -111,7 +111,10 @@ side_by_side(((zooms[0], "gongsynth: 200″ quiet region"), (zooms[1], "real GON
 # noise in the quietest 60″ box near disk centre and from pixel differences,
 # the mean :math:`|B|`, the 99th and 99.9th percentiles of
 # :math:`|B - \mathrm{median}|`, the mean :math:`|B|` from disk centre to the
-# limb and the spatial power spectra of the central 640″; each also with the
+# limb and the spatial power spectra of the central 640″ (and of the four 640″
+# boxes that tile the central 1280″, dotted: one box's spectrum at network
+# scales strays by a factor ~1.4 from one map of the same Sun to the next, see
+# the noise guide); each also with the
 # two maps' noise matched (white noise added to the quieter one), since a KS
 # distance alone mixes the Sun and the noise.
 

@@ -301,7 +301,7 @@ class StatisticsComparison:
         ax.set_ylabel("power [G² Mm²]", fontsize=8)
         ax.tick_params(labelsize=7)
         box = t.meta.get("box_pixels", ("?",))[0]
-        ax.set_title(f"power spectrum, central {box}² pixels (grey: 5-100 Mm)", fontsize=8)
+        ax.set_title(f"power spectrum, central {box}² pixels (dotted: 4 boxes; grey: 5-100 Mm)", fontsize=8)
         ax.legend(fontsize=6)
 
     def plot_rings(self, ax, colours=None):
