@@ -32,11 +32,7 @@ import scipy.stats
 import sunpy.map
 from astropy.table import QTable
 
-from gongsynth.analysis.disk import (
-    check_map,
-    disk_coordinates,
-    map_values,
-)
+from gongsynth.analysis.disk import check_map, disk_coordinates, map_values
 from gongsynth.analysis.network_clusters import network_clusters
 from gongsynth.analysis.noise import noise_estimate
 from gongsynth.analysis.power_spectrum import power_spectrum, quadrant_power_spectrum
