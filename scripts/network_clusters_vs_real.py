@@ -41,7 +41,8 @@ def simulated(instrument, seed, cache):
     """
     The run of ``instrument``'s real map: its magnetogram and truth ⊗ PSF (run and saved first if missing).
 
-    Also used by ``scripts/limb_signal_vs_real.py`` (the same runs, the same cache).
+    Also used by ``scripts/limb_signal_vs_real.py`` and ``scripts/power_spectrum_seeds.py`` (the same
+    runs, the same cache).
     """
     import astropy.units as u
     import sunpy.map
