@@ -24,16 +24,17 @@ above τ ≤ `TAU_TOP` at every wavelength.
 
 `solve_columns` is the fast implementation: per ray (`_solve_rays`) it
 advances all wavelengths together point by point in loops the compiler
-vectorises, takes w(z) in W4's regions as contiguous runs of wavelengths
-(`_w_vec`: a Taylor table where Humlíček's W4 is slow, more accurate than W4
-there), the σ profiles from the Taylor series in the Zeeman shift when it is
-below `VB_TAYLOR` Doppler widths (to the order the shift needs), and the scalar solve on rays with B = 0.
-w(z) and the σ series stay in float64 (the series' recurrence cancels in the
-wings); the absorption-matrix elements, Δτ, e^−Δτ, the DELO weights (from
-their series below Δτ = 0.3, where 1 − e^−Δτ would cancel in float32) and the
-4 × 4 recursion are float32, twice the SIMD width, within 2e-5 of the
-continuum of the float64 recursion (measured on the 3-D Sun's rays).  The bottom
-point's incoming intensity (diffusion approximation) is taken from the first
+vectorises, takes w(z) from Weideman's form in float32 (`_w_vec`,
+`~gongsynth.sun.rt.voigt.w_weideman32`: relative error < 1e-6, eight SIMD
+lanes, no branch), the σ profiles from the Taylor series in the Zeeman shift
+when it is below `VB_TAYLOR` Doppler widths (where w(x − v_B) − w(x + v_B) of
+two float32 values would lose the difference to rounding) and from w at x ± v_B
+above it, and the scalar solve on rays with B = 0.  The σ series stays in
+float64 (its recurrence cancels in the wings); the absorption-matrix elements,
+Δτ, e^−Δτ, the DELO weights (from their series below Δτ = 0.3, where
+1 − e^−Δτ would cancel in float32) and the 4 × 4 recursion are float32, within
+2e-5 of the continuum of the float64 recursion (measured on the 3-D Sun's
+rays).  The bottom point's incoming intensity (diffusion approximation) is taken from the first
 step's Δτ, so the whole ray goes through the vectorised loops.  Its
 only fast-math flag is fused multiply-add, so it gives the same bits for any
 block size and thread count.  `solve_columns_reference` is the first, simple implementation of
@@ -48,16 +49,7 @@ import numpy as np
 
 from gongsynth.sun.rt.core_depth import LIGHT_CM_PER_S as _C
 from gongsynth.sun.rt.core_depth import ZEEMAN_CM_PER_G, core_depth_rays, point_parameters
-from gongsynth.sun.rt.voigt import (
-    TABLE_YMAX,
-    faddeeva,
-    faddeeva_fast,
-    sigma_taylor_vec,
-    w_region1,
-    w_region2,
-    w_table,
-    w_weideman,
-)
+from gongsynth.sun.rt.voigt import faddeeva, faddeeva_fast, sigma_taylor_vec, w_weideman32
 from gongsynth.threads import run_chunks
 
 __all__ = ["faddeeva", "faddeeva_fast", "solve_columns", "solve_columns_reference", "TAU_BOTTOM", "TAU_TOP",
@@ -67,8 +59,9 @@ __all__ = ["faddeeva", "faddeeva_fast", "solve_columns", "solve_columns_referenc
 TAU_BOTTOM = 60.0
 #: Largest optical depth (any wavelength) of the layers above the ray's top point that are left out.
 TAU_TOP = 1e-6
-#: Zeeman splitting (Doppler widths) up to which the σ profiles come from the Taylor series about π's.
-VB_TAYLOR = 0.1
+#: Zeeman splitting (Doppler widths) up to which the σ profiles come from the Taylor series about π's
+#: (order ≤ 4; above it the float32 difference w(x − v_B) − w(x + v_B) errs by < 6e-5 of its peak).
+VB_TAYLOR = 0.006
 #: Fast-math flags of the fast solver: only fused multiply-add (no reassociation, NaN and inf kept), so the
 #: result is the same for any block size and thread count.
 _CONTRACT = {"contract"}
@@ -270,40 +263,16 @@ def _reference_rays(start, stop, lam_cm, lam0, lande_g, core_index, ds, kc_all, 
 @nb.njit(cache=True, error_model="numpy", fastmath=_CONTRACT)
 def _w_vec(dl, rd, shift, y, xs, wr, wi):
     """
-    w(x + i y) of all wavelengths at one point, x = dl·rd − shift (increasing with the index).
+    w(x + i y) of all wavelengths at one point, x = dl·rd − shift, into ``xs``, ``wr``, ``wi``.
 
-    W4's regions are contiguous runs of wavelengths, so each is a loop of its own that the compiler
-    vectorises: the Taylor table where |x| + y < 5.5 (y ≤ `TABLE_YMAX`), W4's region 2 up to
-    |x| + y < 15, region 1 beyond; with y > `TABLE_YMAX` (rare) Weideman's `w_weideman`.
+    Weideman's form in float32 (`w_weideman32`, relative error < 1e-6 of |w|): one branch-free loop
+    over the wavelengths that the compiler vectorises with eight lanes.
     """
-    nl = dl.size
-    for j in range(nl):
-        xs[j] = dl[j] * rd - shift
-    if y > TABLE_YMAX:
-        for j in range(nl):
-            wr[j], wi[j] = w_weideman(xs[j], y)
-        return
-    b1 = 5.5 - y
-    b2 = 15.0 - y
-    n1 = 0                       # x ≤ −b2, x ≤ −b1, x < b1, x < b2: the runs' ends
-    n2 = 0
-    n3 = 0
-    n4 = 0
-    for j in range(nl):
-        n1 += xs[j] <= -b2
-        n2 += xs[j] <= -b1
-        n3 += xs[j] < b1
-        n4 += xs[j] < b2
-    for j in range(n2, n3):
-        wr[j], wi[j] = w_table(xs[j], y)
-    for j in range(n1, n2):
-        wr[j], wi[j] = w_region2(xs[j], y)
-    for j in range(n3, n4):
-        wr[j], wi[j] = w_region2(xs[j], y)
-    for j in range(n1):
-        wr[j], wi[j] = w_region1(xs[j], y)
-    for j in range(n4, nl):
-        wr[j], wi[j] = w_region1(xs[j], y)
+    y32 = np.float32(y)
+    for j in range(dl.size):
+        x = dl[j] * rd - shift
+        xs[j] = x
+        wr[j], wi[j] = w_weideman32(np.float32(x), y32)
 
 
 _F = np.float32
@@ -393,7 +362,7 @@ def solve_columns(lam_cm, lam0, lande_g, core_index, ds, kc_all, kl_all, dop_all
     another, chunks of rays on the threads of `~gongsynth.threads.run_chunks`):
     all wavelengths are advanced together point by point (independent work
     for the processor between the steps of one recursion),
-    w(z) in W4's regions as contiguous runs of wavelengths (`_w_vec`), and a ray
+    w(z) from Weideman's form in float32 over all wavelengths at once (`_w_vec`), and a ray
     with B = 0 at every integrated point takes the scalar solve (Q = U = V = 0
     exactly; I as the 4 × 4 solve gives it with zero off-diagonal elements).
     Each ray's result depends on that ray's data only (any block size, any threads).
@@ -509,7 +478,7 @@ def _solve_rays(start, stop, dl, lam0, lande_g, ds, kc_all, kl_all, dop_all, dam
                     pr3[j] = pr1[j]
                     pr4[j] = 0.0
                     pr5[j] = 0.0
-            elif vb <= VB_TAYLOR and ak <= TABLE_YMAX:
+            elif vb <= VB_TAYLOR:
                 sigma_taylor_vec(xs, ak, vb, pr0, pr1, pr2, pr3, pr4, pr5, sw)
             else:
                 _w_vec(dl, rd, vs - vb, ak, pr4, pr2, pr3)           # w(x + vb)

@@ -1,19 +1,16 @@
 r"""
 The Faddeeva function w(z) = e^{−z²} erfc(−i z) for the line profiles: H = Re w, 2F = Im w.
 
-`faddeeva` is Humlíček's (1982) W4, relative accuracy ~1e-4.  `w_table` covers
-W4's costly regions 3 and 4 (|x| + y < 5.5, y ≤ 2) in the vectorised solver:
-6th-order Taylor polynomials of w about nodes 0.2 apart, whose coefficients
-come from `scipy.special.wofz` and the recurrence of the derivatives
-(truncation error < 1e-7 of w(i y)); `w_region2` and `w_region1` are W4's cheap
-outer regions (|x| + y ≥ 5.5).  `w_weideman` is Weideman's (1994, SIAM Journal
-on Numerical Analysis 31, 1497, eq. 38-39) 16-term rational approximation,
-branch-free and valid in the whole upper half plane (relative error < 5e-7 of
-|w(z)|, measured against `scipy.special.wofz` for y ≥ 1e-5, |x| ≤ 60), by
-Estrin's scheme; `faddeeva_fast` is it for one point (the solver's rare paths:
-damping > 2, the core's optical depth).  In the solver's vectorised loops it is
-slower than the table (~80 vector operations per 4 points; ``benchmarks/README.md``,
-rt26).  `sigma_taylor` gives the σ components of a Zeeman triplet from w at the
+`faddeeva` is Humlíček's (1982) W4, relative accuracy ~1e-4 (the reference
+solver's).  `w_weideman` is Weideman's (1994, SIAM Journal on Numerical
+Analysis 31, 1497, eq. 38-39) 16-term rational approximation, branch-free and
+valid in the whole upper half plane (relative error < 5e-7 of |w(z)|, measured
+against `scipy.special.wofz` for y ≥ 1e-5, |x| ≤ 60), by Estrin's scheme;
+`faddeeva_fast` is it for one point (the core's optical depth).
+`w_weideman32` is the same form in float32 arithmetic (relative error < 1e-6):
+the fast solver's w(z), a loop over the wavelengths that the compiler
+vectorises with eight lanes (``benchmarks/README.md``, "w(z) in float32").
+`sigma_taylor` gives the σ components of a Zeeman triplet from w at the
 π component's position (`sigma_taylor_vec`: for all wavelengths at once).
 """
 from __future__ import annotations
@@ -22,34 +19,9 @@ import math
 
 import numba as nb
 import numpy as np
-from scipy.special import wofz
 
-__all__ = ["faddeeva", "faddeeva_fast", "w_weideman", "w_table", "w_region1", "w_region2", "sigma_taylor",
-           "sigma_taylor_vec", "TABLE_STEP", "TABLE_YMAX", "WEIDEMAN_N"]
-
-#: Node spacing of the Taylor table.
-TABLE_STEP = 0.2
-TABLE_ORDER = 6
-#: Largest y of the Taylor table.
-TABLE_YMAX = 2.0
-TABLE_NX = 29
-TABLE_NY = 11
-
-
-def _faddeeva_table():
-    """Taylor coefficients w⁽ⁿ⁾(z₀)/n! at z₀ = x₀ + i y₀, x₀ = 0..5.6, y₀ = 0..2 (step 0.2), as (re, im)."""
-    xs = np.arange(TABLE_NX) * TABLE_STEP
-    ys = np.arange(TABLE_NY) * TABLE_STEP
-    z0 = xs[None, :] + 1j * ys[:, None]
-    w = wofz(z0)
-    der = [w, -2.0 * z0 * w + 2j / math.sqrt(math.pi)]          # w' = -2 z w + 2i/√π
-    for n in range(1, TABLE_ORDER):
-        der.append(-2.0 * z0 * der[n] - 2.0 * n * der[n - 1])   # w⁽ⁿ⁺¹⁾ = -2 z w⁽ⁿ⁾ - 2n w⁽ⁿ⁻¹⁾
-    c = np.stack([der[n] / math.factorial(n) for n in range(TABLE_ORDER + 1)], axis=-1)
-    return np.ascontiguousarray(np.stack([c.real, c.imag], axis=-1))
-
-
-_TABLE = _faddeeva_table()
+__all__ = ["faddeeva", "faddeeva_fast", "w_weideman", "w_weideman32", "sigma_taylor", "sigma_taylor_vec",
+           "WEIDEMAN_N"]
 
 #: Terms of Weideman's approximation (N in his eq. 38).
 WEIDEMAN_N = 16
@@ -73,6 +45,8 @@ def _weideman_coefficients(n):
 
 _WL, _WA = _weideman_coefficients(WEIDEMAN_N)
 _RSQPI = 1.0 / math.sqrt(math.pi)
+_F32 = np.float32
+_WL32, _WA32, _RSQPI32 = _F32(_WL), tuple(_F32(v) for v in _WA), _F32(_RSQPI)
 
 
 @nb.njit(cache=True, inline="always")
@@ -107,6 +81,38 @@ def _cmul(ar, ai, br, bi):
 
 
 @nb.njit(cache=True, inline="always")
+def _weideman(x, y, lam, a, rsqpi, two, one):
+    """Weideman's form in the precision of its constants (``lam`` = L, ``a``, 1/√π, 2, 1)."""
+    lp = lam + y
+    d = one / (lp * lp + x * x)
+    rr = lp * d                            # 1/(L − i z) = rr + i ri
+    ri = x * d
+    zr = (lam * lam - y * y - x * x) * d   # Z = (L + i z)/(L − i z)
+    zi = two * lam * x * d
+    z2r, z2i = _cmul(zr, zi, zr, zi)
+    z4r, z4i = _cmul(z2r, z2i, z2r, z2i)
+    z8r, z8i = _cmul(z4r, z4i, z4r, z4i)
+    # a₂ₖ + a₂ₖ₊₁ Z, then pairs of those with Z², Z⁴, Z⁸.
+    tr, ti = _cmul(z2r, z2i, a[2] + a[3] * zr, a[3] * zi)
+    r0r, r0i = a[0] + a[1] * zr + tr, a[1] * zi + ti
+    tr, ti = _cmul(z2r, z2i, a[6] + a[7] * zr, a[7] * zi)
+    r1r, r1i = a[4] + a[5] * zr + tr, a[5] * zi + ti
+    tr, ti = _cmul(z2r, z2i, a[10] + a[11] * zr, a[11] * zi)
+    r2r, r2i = a[8] + a[9] * zr + tr, a[9] * zi + ti
+    tr, ti = _cmul(z2r, z2i, a[14] + a[15] * zr, a[15] * zi)
+    r3r, r3i = a[12] + a[13] * zr + tr, a[13] * zi + ti
+    tr, ti = _cmul(z4r, z4i, r1r, r1i)
+    s0r, s0i = r0r + tr, r0i + ti
+    tr, ti = _cmul(z4r, z4i, r3r, r3i)
+    s1r, s1i = r2r + tr, r2i + ti
+    tr, ti = _cmul(z8r, z8i, s1r, s1i)
+    pr, pi_ = s0r + tr, s0i + ti
+    sr, si = _cmul(rr, ri, rr, ri)
+    qr, qi = _cmul(pr, pi_, sr, si)
+    return two * qr + rsqpi * rr, two * qi + rsqpi * ri
+
+
+@nb.njit(cache=True, inline="always")
 def w_weideman(x, y):
     """
     Re and Im of w(x + i y), y ≥ 0, by Weideman's (1994) 16-term rational approximation.
@@ -129,34 +135,30 @@ def w_weideman(x, y):
     >>> round(w_weideman(0.0, 0.05)[0], 6)     # scipy.special.wofz(0.05j) = 0.9459900...
     0.94599
     """
-    lp = _WL + y
-    d = 1.0 / (lp * lp + x * x)
-    rr = lp * d                            # 1/(L − i z) = rr + i ri
-    ri = x * d
-    zr = (_WL * _WL - y * y - x * x) * d   # Z = (L + i z)/(L − i z)
-    zi = 2.0 * _WL * x * d
-    a = _WA
-    z2r, z2i = _cmul(zr, zi, zr, zi)
-    z4r, z4i = _cmul(z2r, z2i, z2r, z2i)
-    z8r, z8i = _cmul(z4r, z4i, z4r, z4i)
-    # a₂ₖ + a₂ₖ₊₁ Z, then pairs of those with Z², Z⁴, Z⁸.
-    tr, ti = _cmul(z2r, z2i, a[2] + a[3] * zr, a[3] * zi)
-    r0r, r0i = a[0] + a[1] * zr + tr, a[1] * zi + ti
-    tr, ti = _cmul(z2r, z2i, a[6] + a[7] * zr, a[7] * zi)
-    r1r, r1i = a[4] + a[5] * zr + tr, a[5] * zi + ti
-    tr, ti = _cmul(z2r, z2i, a[10] + a[11] * zr, a[11] * zi)
-    r2r, r2i = a[8] + a[9] * zr + tr, a[9] * zi + ti
-    tr, ti = _cmul(z2r, z2i, a[14] + a[15] * zr, a[15] * zi)
-    r3r, r3i = a[12] + a[13] * zr + tr, a[13] * zi + ti
-    tr, ti = _cmul(z4r, z4i, r1r, r1i)
-    s0r, s0i = r0r + tr, r0i + ti
-    tr, ti = _cmul(z4r, z4i, r3r, r3i)
-    s1r, s1i = r2r + tr, r2i + ti
-    tr, ti = _cmul(z8r, z8i, s1r, s1i)
-    pr, pi_ = s0r + tr, s0i + ti
-    sr, si = _cmul(rr, ri, rr, ri)
-    qr, qi = _cmul(pr, pi_, sr, si)
-    return 2.0 * qr + _RSQPI * rr, 2.0 * qi + _RSQPI * ri
+    return _weideman(x, y, _WL, _WA, _RSQPI, 2.0, 1.0)
+
+
+@nb.njit(cache=True, inline="always")
+def w_weideman32(x, y):
+    """
+    `w_weideman` in float32 arithmetic: twice the SIMD lanes, relative error < 1e-6 of |w|.
+
+    Parameters
+    ----------
+    x, y : numpy.float32
+        The argument (y ≥ 0).  A float64 argument is rounded to float32 first.
+
+    Returns
+    -------
+    tuple of numpy.float32
+        Re w, Im w.
+
+    Examples
+    --------
+    >>> round(float(w_weideman32(0.0, 0.05)[0]), 6)     # scipy.special.wofz(0.05j) = 0.9459900...
+    0.94599
+    """
+    return _weideman(_F32(x), _F32(y), _WL32, _WA32, _RSQPI32, _F32(2.0), _F32(1.0))
 
 
 @nb.njit(cache=True)
@@ -181,103 +183,6 @@ def faddeeva_fast(x, y):
     0.94599
     """
     return w_weideman(x, y)
-
-
-@nb.njit(cache=True, inline="always")
-def w_table(x, y):
-    """
-    w(x + i y) from the Taylor table: accurate where |x| + y < 5.5 and y ≤ 2, finite anywhere.
-
-    Parameters
-    ----------
-    x, y : float
-        The argument (y ≥ 0).
-
-    Returns
-    -------
-    tuple of float
-        Re w, Im w.
-
-    Examples
-    --------
-    >>> round(w_table(0.0, 0.05)[0], 6)
-    0.94599
-    """
-    ax = abs(x)
-    ix = min(max(int(min(ax, 1e6) * (1.0 / TABLE_STEP) + 0.5), 0), TABLE_NX - 1)   # in the table for any
-    iy = min(max(int(min(y, 1e6) * (1.0 / TABLE_STEP) + 0.5), 0), TABLE_NY - 1)    # x, y (NaN, inf too)
-    dx = ax - ix * TABLE_STEP
-    dy = y - iy * TABLE_STEP
-    wr = _TABLE[iy, ix, 6, 0]
-    wi = _TABLE[iy, ix, 6, 1]
-    wr, wi = wr * dx - wi * dy + _TABLE[iy, ix, 5, 0], wr * dy + wi * dx + _TABLE[iy, ix, 5, 1]
-    wr, wi = wr * dx - wi * dy + _TABLE[iy, ix, 4, 0], wr * dy + wi * dx + _TABLE[iy, ix, 4, 1]
-    wr, wi = wr * dx - wi * dy + _TABLE[iy, ix, 3, 0], wr * dy + wi * dx + _TABLE[iy, ix, 3, 1]
-    wr, wi = wr * dx - wi * dy + _TABLE[iy, ix, 2, 0], wr * dy + wi * dx + _TABLE[iy, ix, 2, 1]
-    wr, wi = wr * dx - wi * dy + _TABLE[iy, ix, 1, 0], wr * dy + wi * dx + _TABLE[iy, ix, 1, 1]
-    wr, wi = wr * dx - wi * dy + _TABLE[iy, ix, 0, 0], wr * dy + wi * dx + _TABLE[iy, ix, 0, 1]
-    return wr, (wi if x >= 0.0 else -wi)
-
-
-
-@nb.njit(cache=True, inline="always")
-def w_region1(x, y):
-    """
-    Humlíček's W4 region 1 (|x| + y ≥ 15) in real arithmetic: w = i t/√π / (1/2 + t²), t = y − i x.
-
-    Parameters
-    ----------
-    x, y : float
-        The argument (y ≥ 0).
-
-    Returns
-    -------
-    tuple of float
-        Re w, Im w (as `faddeeva` gives them there).
-
-    Examples
-    --------
-    >>> round(w_region1(20.0, 0.01)[1], 6)     # scipy.special.wofz: 0.0282449
-    0.028245
-    """
-    ur = y * y - x * x                   # u = t²
-    ui = -2.0 * x * y
-    dr = 0.5 + ur
-    q = 0.5641896 / (dr * dr + ui * ui)
-    return q * (y * dr - x * ui), q * (-y * ui - x * dr)
-
-
-@nb.njit(cache=True, inline="always")
-def w_region2(x, y):
-    """
-    Humlíček's W4 region 2 (5.5 ≤ |x| + y < 15) in real arithmetic.
-
-    Parameters
-    ----------
-    x, y : float
-        The argument (y ≥ 0).
-
-    Returns
-    -------
-    tuple of float
-        Re w, Im w (as `faddeeva` gives them there).
-
-    Examples
-    --------
-    >>> round(w_region2(10.0, 0.01)[1], 6)
-    0.056705
-    """
-    ur = y * y - x * x
-    ui = -2.0 * x * y
-    nr = 1.410474 + 0.5641896 * ur
-    ni = 0.5641896 * ui
-    pr = y * nr + x * ni
-    pi_ = y * ni - x * nr
-    er = 3.0 + ur
-    dr2 = 0.75 + ur * er - ui * ui
-    di2 = ur * ui + ui * er
-    q2 = 1.0 / (dr2 * dr2 + di2 * di2)
-    return q2 * (pr * dr2 + pi_ * di2), q2 * (pi_ * dr2 - pr * di2)
 
 
 @nb.njit(cache=True, inline="always")
@@ -337,11 +242,11 @@ def sigma_taylor_vec(xs, y, vb, hp, fp, hs, fs, hd, fd, work):
 
     vb ≤ the kernels' ``VB_TAYLOR``; the same recurrence, order by order over all wavelengths (loops
     the compiler vectorises), up to the first order N whose term's bound (1.4 vb)^N/√(N!) is below
-    1e-9, at most 7 (`sigma_taylor`'s): N ≤ 4 below vb = 0.006, 5 below 0.018, 6 below 0.039.  In the
-    wings too: the recurrence's error there stays below W4's own, < 4e-5 of the peak for vb ≤ 0.15
-    (fused multiply-add only, as in the kernels).  ``xs``, ``hp``, ``fp``: x and w(x + i y) per
-    wavelength; out: ``hs``, ``fs``, ``hd``, ``fd`` as `sigma_taylor`'s four results; ``work``: (4, nλ)
-    scratch.
+    1e-9, at most 7 (`sigma_taylor`'s): N ≤ 4 below vb = 0.006, 5 below 0.018, 6 below 0.039.  From
+    `w_weideman32`'s π profiles (|x| ≤ 15, vb ≤ 0.006) both results are within 2e-6 of their peaks
+    for y ≤ 1 and 6e-6 at y = 3, in the wings too (fused multiply-add only, as in the kernels).
+    ``xs``, ``hp``, ``fp``: x and w(x + i y) per wavelength; out: ``hs``, ``fs``, ``hd``, ``fd`` as
+    `sigma_taylor`'s four results; ``work``: (4, nλ) scratch.
     """
     nl = xs.size
     order = 1
