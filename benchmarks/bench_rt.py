@@ -37,12 +37,14 @@ from gongsynth.sun.rt import synthesis
 from gongsynth.sun.rt.kernels import solve_columns_reference
 from gongsynth.sun.rt.voigt import faddeeva
 
-#: Floating-point operations per voxel-wavelength of the fast solver with a weak field (the default run's
-#: common case), counted from `gongsynth.sun.rt.kernels._solve_rays`: x (2), w(z) (Taylor table 28 /
-#: W4 region 2 ~30 / region 1 ~14; ~24 on the default grid), σ by the Taylor recurrence (~70), the
-#: absorption-matrix elements (~20), Δτ and e^-Δτ (~22), the DELO weights (~10), the right-hand side (~40)
-#: and the 4 × 4 elimination (~45); 6 divisions, counted as 4 operations each.
-FLOPS_PER_VW = 257
+#: Floating-point operations per voxel-wavelength of the fast solver, counted from
+#: `gongsynth.sun.rt.kernels._solve_rays` in float64 equivalents (a float32 operation fills half a float64
+#: one's SIMD width, so it counts ½): x (2), w(z) by Weideman's form in float32 (~114 → 57), the σ profiles
+#: at a field above 0.006 Doppler widths (most points of the 3-D Sun) from w(x ± v_B) (~114 → 57 each)
+#: and their sums (6), the absorption-matrix elements (~20 → 10), Δτ and e^-Δτ (~22 → 11), the DELO
+#: weights (~10 → 5), the right-hand side (~40 → 20) and the 4 × 4 elimination (~45 → 23); divisions
+#: counted as 4 operations each.
+FLOPS_PER_VW = 248
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 
