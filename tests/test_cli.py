@@ -19,6 +19,31 @@ def test_print_defaults_is_a_complete_valid_config(capsys):
     assert "\nseed =" not in text
 
 
+def test_console_script_runs_main_then_freezes_the_garbage_collector(monkeypatch, capsys):
+    """The ``gongsynth`` command's entry point (pyproject) returns `main`'s code and freezes the objects
+    out of the interpreter's last collections; `main` itself, called in a process that goes on, does not."""
+    import gc
+    import tomllib
+    from pathlib import Path
+
+    from gongsynth.cli import run_command
+
+    scripts = tomllib.loads((Path(__file__).parents[1] / "pyproject.toml").read_text())["project"]["scripts"]
+    assert scripts["gongsynth"] == "gongsynth.cli:run_command"
+    gc.unfreeze()
+    assert main(["config", "--print-defaults"]) == 0
+    assert gc.get_freeze_count() == 0
+    monkeypatch.setattr(sys, "argv", ["gongsynth", "config", "--print-defaults"])
+    try:
+        code = run_command()
+        frozen = gc.get_freeze_count()
+    finally:
+        gc.unfreeze()
+    assert code == 0
+    assert frozen > 0
+    assert "[simulation]" in capsys.readouterr().out
+
+
 def test_bad_config_key_exits_2_and_names_it(tmp_path, capsys):
     path = tmp_path / "run.toml"
     path.write_text('[simulation]\nlatitud = "30 deg"\n')
