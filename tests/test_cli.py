@@ -21,7 +21,8 @@ def test_print_defaults_is_a_complete_valid_config(capsys):
 
 def test_console_script_runs_main_then_freezes_the_garbage_collector(monkeypatch, capsys):
     """The ``gongsynth`` command's entry point (pyproject) returns `main`'s code and freezes the objects
-    out of the interpreter's last collections; `main` itself, called in a process that goes on, does not."""
+    out of the garbage collector's passes (before the run and before the exit); `main` itself, called in
+    a process that goes on, does not."""
     import gc
     import tomllib
     from pathlib import Path
