@@ -567,8 +567,7 @@ def _describe(exc):
 
 
 def _with_notes(message, exc):
-    notes = getattr(exc, "__notes__", [])
-    return "; ".join([message, *notes])
+    return "; ".join([message, *getattr(exc, "__notes__", [])])
 
 
 def _fail(message, code):
@@ -583,11 +582,8 @@ def run_command():
     """
     Entry point of the ``gongsynth`` console script: `main` on ``sys.argv``, in a process that ends next.
 
-    The objects its imports made (~10⁶: sunpy's, astropy's, matplotlib's, numba's, all alive to the
-    end) are frozen out of the garbage collector's passes (`gc.freeze`) before the run, which would
-    otherwise traverse them at every full collection (~0.5 s of a 6-s default run), and the run's own
-    objects before the process exits, whose teardown would collect over them all (~0.9 s).  Not in
-    `main`, which tests and scripts call in processes that go on.
+    Freezes (`gc.freeze`) the imports' ~10⁶ objects out of the run's full collections (~0.5 s of a 6-s
+    run), then the run's out of the teardown's (~0.9 s).  Not in `main`, which tests and scripts call.
 
     Returns
     -------
