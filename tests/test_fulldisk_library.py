@@ -354,11 +354,15 @@ def test_cached_library_round_trip(tmp_path, monkeypatch):
     args = dict(shape=(16, 16), pixel_size=6 * u.Mm, seeds_per_level=(1, 1, 1, 1), theta=(0, 40, 80), seed=3)
     built = cached_library(**args)
     assert cached_library(**args) is built
+    # Once written, the first run goes on from the memory-mapped copy too (the built arrays freed).
+    assert isinstance(built.patches, np.memmap) and "cache" in built.meta
+    direct = build_library(**args)
     monkeypatch.setattr(library_module, "_MEMO", {})
     loaded = cached_library(**args)
     assert loaded is not built and "cache" in loaded.meta
-    assert np.array_equal(loaded.patches, built.patches) and np.array_equal(loaded.uniform, built.uniform)
-    assert np.array_equal(loaded.basis.amplitudes, built.basis.amplitudes)
+    for got in (built, loaded):
+        assert np.array_equal(got.patches, direct.patches) and np.array_equal(got.uniform, direct.uniform)
+        assert np.array_equal(got.basis.amplitudes, direct.basis.amplitudes)
     assert len(list(tmp_path.iterdir())) == 1
 
 

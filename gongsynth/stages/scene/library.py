@@ -530,14 +530,17 @@ def cached_library(*, sun="milne-eddington", progress=False, **arguments):
         return _MEMO[key]
     folder = None if cache_directory() is None else cache_directory() / f"library-{key}"
     library = None
+
+    def rows_line():
+        # ``line`` is the Milne-Eddington NiLine, or the 3-D library's spectral line (then the rows' limb
+        # darkening is the Milne-Eddington description's of the instrument's line, see library_rt).
+        given = arguments.get("line")
+        return given if isinstance(given, NiLine) else me_line(
+            instruments.get(arguments.get("instrument")).line)
+
     if folder is not None and folder.exists():
         try:
-            # ``line`` is the Milne-Eddington NiLine, or the 3-D library's spectral line (then the rows'
-            # limb darkening is the Milne-Eddington description's of the instrument's line, see library_rt).
-            given = arguments.get("line")
-            rows_line = given if isinstance(given, NiLine) else me_line(
-                instruments.get(arguments.get("instrument")).line)
-            library = _load(folder, rows_line)
+            library = _load(folder, rows_line())
         except (OSError, ValueError, KeyError, TypeError) as exc:
             warn_cache(f"the cached patch library {folder} is damaged ({exc}); it is rebuilt and replaced")
             library = None
@@ -545,8 +548,10 @@ def cached_library(*, sun="milne-eddington", progress=False, **arguments):
         library = build()
         if folder is not None:
             _save(library, folder)
-            if folder in _VERIFIED:     # written: what is derived from it is kept beside it too
-                library = dataclasses.replace(library, meta={**library.meta, "cache": str(folder)})
+            if folder in _VERIFIED:
+                # Written: the run goes on from the memory-mapped copy, as a cached run does (the same
+                # library; the built patches, 0.8 GB for HMI's Milne-Eddington one, are freed).
+                library = _load(folder, rows_line())
     _MEMO.clear()      # keep one: a library is ~300 MB
     _MEMO[key] = library
     return library
