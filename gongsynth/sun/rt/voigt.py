@@ -191,7 +191,7 @@ def sigma_taylor(x, y, vb, wr, wi):
     σ components from w(z) = wr + i wi by the Taylor series in ±vb (z = x + i y, small vb).
 
     Derivatives from w' = −2 z w + 2i/√π, w⁽ⁿ⁺¹⁾ = −2 z w⁽ⁿ⁾ − 2 n w⁽ⁿ⁻¹⁾; terms up to vb⁷
-    (error ~(1.4 vb)⁸/√8! of w: < 1e-9 for vb ≤ 0.1, the kernels' `VB_TAYLOR`).
+    (error ~(1.4 vb)⁸/√8! of w: < 1e-9 for vb ≤ 0.1; the kernels take it up to their `VB_TAYLOR`).
 
     Parameters
     ----------
