@@ -156,7 +156,9 @@ def test_a_damaged_cache_entry_is_detected_rebuilt_and_replaced(cache, damage):
     from gongsynth.stages.scene.library import CacheWarning, cached_library
 
     folder, new_process = cache
-    built = cached_library(**TINY_LIBRARY)
+    # The numbers, copied: the library maps the entry's file (built or loaded alike), which this test
+    # damages in place as if from outside; a replaced entry is a new file, which leaves a mapping intact.
+    built = np.array(cached_library(**TINY_LIBRARY).patches)
     patches = _entry(folder) / "patches.npy"
     if damage == "scaled":      # the audit's case: a plausible library, 30 % brighter
         np.save(patches, np.load(patches) * 1.3)
@@ -171,13 +173,13 @@ def test_a_damaged_cache_entry_is_detected_rebuilt_and_replaced(cache, damage):
     new_process()
     with pytest.warns(CacheWarning, match="damaged.*rebuilt and replaced"):
         again = cached_library(**TINY_LIBRARY)
-    assert np.array_equal(again.patches, built.patches)
+    assert np.array_equal(again.patches, built)
     new_process()
     import warnings
     with warnings.catch_warnings():
         warnings.simplefilter("error", CacheWarning)     # repaired: loaded quietly, the same numbers
         loaded = cached_library(**TINY_LIBRARY)
-    assert "cache" in loaded.meta and np.array_equal(loaded.patches, built.patches)
+    assert "cache" in loaded.meta and np.array_equal(loaded.patches, built)
     assert [p.name for p in folder.iterdir()] == [_entry(folder).name]
 
 
