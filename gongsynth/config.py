@@ -80,9 +80,10 @@ _DOCS = {
     "like": "a real GONG full-disk FITS file whose date, site, plate scale and pointing the run takes",
     "like_counts": "with like: scale the expected counts to the file's count level (its DIODE sums), i.e. "
                    "the effective area of that observation (false: the instrument's effective_area)",
-    "network": "full-disk mode: lay the magnetic network on supergranular cells over the large-scale field "
-               "(true; false: the field as it is; unset: on for the synthetic and quiet Suns, off over an "
-               "observed map, which holds the Sun's own network); tiled mode: see [photosphere] network",
+    "network": "full-disk mode: lay the magnetic network on supergranular cells over the large-scale field, "
+               "and their flow in the Doppler shifts (true; false: the field as it is; unset: on for the "
+               "synthetic and quiet Suns, off over an observed map, which holds the Sun's own network); "
+               "tiled mode: see [photosphere] network",
 }
 
 
@@ -360,12 +361,13 @@ class SimulationConfig:
         header); default False: the instrument's ``effective_area``.
     network : bool or None
         Full-disk mode: lay the magnetic network on supergranular cells
-        (`gongsynth.sun.surface_field.network`) over the large-scale field.
-        Default (None): on for the ``"synthetic"`` and ``"quiet"`` surface
-        fields, off over an observed map (it holds the Sun's own network;
-        see `network_on`); no effect in tiled mode, whose 3-D Sun has its
-        own switch, ``[photosphere] network``
-        (`gongsynth.sun.model_atmosphere.network_layout`).
+        (`gongsynth.sun.surface_field.network`) over the large-scale field,
+        and shift the spectra by the same cells' flow
+        (`gongsynth.sun.surface_field.supergranulation`).  Default (None): on
+        for the ``"synthetic"`` and ``"quiet"`` surface fields, off over an
+        observed map (it holds the Sun's own network; see `network_on`); no
+        effect in tiled mode, whose 3-D Sun has its own switch,
+        ``[photosphere] network`` (`gongsynth.sun.model_atmosphere.network_layout`).
     pointing : tuple of `~astropy.units.Quantity`
         Full-disk mode: helioprojective (Tx, Ty) of the detector's centre
         (default (0, 0): the Sun's centre on the detector's centre; a real

@@ -321,6 +321,46 @@ def test_dopplergram_follows_rotation_observer_and_blueshift(small_library):
             assert np.median(measured[use]) == pytest.approx(kappa * centre, abs=1)
 
 
+def test_dopplergram_shows_the_networks_supergranular_flow(small_library):
+    """
+    With a network the supergranulation term moves every sample's Doppler shift by κ × its flow.
+
+    Each sample is reduced alone (no PSF, no pixel): its shift is the large-scale grid's
+    line-of-sight flow read bilinearly at the sample, as the renderer reads it, measured ×κ (see
+    the test above).  The Milne-Eddington library's patches hold their own supergranules: with it
+    the term changes nothing, bit for bit.
+    """
+    import dataclasses
+
+    from scipy.interpolate import RegularGridInterpolator
+
+    from gongsynth.sun.surface_field.network import SupergranularNetwork
+
+    network = SupergranularNetwork(seed=2)
+    still = dict(rotation=False, observer=False, blueshift=False)
+    plain_meta = {k: v for k, v in small_library.meta.items() if k != "spectra_carry_supergranulation"}
+    flowing = dataclasses.replace(small_library, meta=plain_meta)
+
+    def doppler_per_sample(library, flow):
+        light, _ = library_scene(library, instrument=WHOLE, detector_shape=210, supersampling=2, obstime=DATE,
+                                 velocities={**still, "supergranulation": flow}, seed=4, network=network)
+        assert light.meta["velocities"]["supergranulation"] == (flow and library is flowing)
+        return reduce(light.data.value, WHOLE).doppler.to_value(u.m / u.s)
+
+    assert np.array_equal(doppler_per_sample(small_library, True), doppler_per_sample(small_library, False),
+                          equal_nan=True)
+    measured = doppler_per_sample(flowing, True) - doppler_per_sample(flowing, False)
+    grid = large_scale_grid(DATE, network=network, rotation=False, observer=False, blueshift=None)
+    g = disk_geometry((420, 420), WHOLE.plate_scale / 2, obstime=DATE)
+    use = g.on_disk & (g.mu > 0.3) & np.isfinite(measured)
+    model = RegularGridInterpolator((grid.latitude, grid.longitude), grid.velocity)(
+        np.column_stack([g.latitude[use], g.longitude[use]]))
+    assert np.std(model) > 120          # √(V_h² sin²θ / 2 + V_z² μ²) over the disk beyond μ = 0.3: ~160
+    slope = np.polyfit(model, measured[use], 1)[0]
+    assert slope == pytest.approx(0.991, abs=0.01)
+    assert np.std(measured[use] - slope * model) < 0.05 * np.std(model)
+
+
 def test_disk_velocity_is_the_rotation_modules_velocity():
     rng = np.random.default_rng(1)
     lon, lat = rng.uniform(-89, 89, 40) * u.deg, rng.uniform(-80, 80, 40) * u.deg

@@ -20,6 +20,7 @@ from gongsynth.stages.scene.disk_render import library_scene
 from gongsynth.stages.scene.fulldisk import DEFAULT_CELL
 from gongsynth.stages.scene.library import cached_library
 from gongsynth.stages.scene.library_rt import (
+    PATCH_FLOW_CUTOFF,
     STRONG_COLUMNS,
     TILED_COLUMN,
     atmosphere_grid,
@@ -62,7 +63,7 @@ def test_rows_are_the_transfer_projected_on_the_basis(tiny_library):
     lib = tiny_library
     seed = child_sequence(as_seed_sequence(2), "library", 1, 0)      # the enhanced-network patch
     atm = model_atmosphere((8, 8), pixel_size=3 * u.Mm, seed=seed, nz=40, element_flux_density=30 * u.G,
-                           positive_fraction=0.8, spot=False)
+                           positive_fraction=0.8, spot=False, flow_cutoff=PATCH_FLOW_CUTOFF)
     layout = lib.layout()
     j1 = lib.rank + 1
     eps = np.finfo(np.float32).eps
@@ -151,7 +152,9 @@ def test_the_default_grid_is_in_the_cache_key(tmp_path, monkeypatch, tiny_librar
 
 def test_the_scene_leaves_out_the_tabulated_blueshift(tiny_library):
     light, _ = library_scene(tiny_library, instrument=WHOLE, detector_shape=100, supersampling=1)
-    assert light.meta["velocities"] == {"rotation": True, "observer": True, "blueshift": False}
+    # No network given: no supergranular cells to flow either.
+    assert light.meta["velocities"] == {"rotation": True, "observer": True, "blueshift": False,
+                                        "supergranulation": False}
 
 
 def test_a_full_disk_run_of_the_3d_sun_repeats_by_seed(tmp_path, monkeypatch):

@@ -33,9 +33,10 @@ mean bisector), a photospheric Fe I line of similar depth and formation height.
 
 `disk_velocity` adds the three for many points at once (plain vector algebra
 in Stonyhurst axes, the observer's velocity from `observer_velocity`).  Not
-included: supergranulation and oscillations (the built-in Sun's own flows
-stand for the small scales), the gravitational redshift (a constant 636 m/s
-that GONG's zero point removes).
+included: supergranulation (a full-disk scene adds its network's flow,
+`gongsynth.sun.surface_field.supergranulation`), oscillations (the built-in
+Sun's own flows stand for the small scales), the gravitational redshift (a
+constant 636 m/s that GONG's zero point removes).
 """
 import astropy.units as u
 import numpy as np

@@ -34,7 +34,7 @@ from gongsynth.validation import check_quantity
 __all__ = ["library_scene", "render_rows", "VELOCITY_TERMS", "LIGHT_BYTES"]
 
 #: The large-scale velocity terms `library_scene` can switch.
-VELOCITY_TERMS = ("rotation", "observer", "blueshift")
+VELOCITY_TERMS = ("rotation", "observer", "blueshift", "supergranulation")
 
 
 def _velocity_terms(velocities):
@@ -240,9 +240,12 @@ def library_scene(library, *, obstime=None, instrument=None, detector_shape=None
     site : `~astropy.coordinates.EarthLocation`, optional
         Ground site (its daily rotation adds to the observer's velocity).
     velocities : bool or dict, optional
-        Which large-scale velocities shift the spectra (`VELOCITY_TERMS`); the
+        Which large-scale velocities shift the spectra (`VELOCITY_TERMS`;
+        ``supergranulation``: the network's cells' flow, only with a network); the
         tabulated convective blueshift is left out for a library whose spectra
-        carry their own (the 3-D Sun's, ``meta["spectra_carry_blueshift"]``).
+        carry their own (the 3-D Sun's, ``meta["spectra_carry_blueshift"]``),
+        the supergranulation for one whose patches hold theirs (the
+        Milne-Eddington library's, ``meta["spectra_carry_supergranulation"]``).
     cell_size : `~astropy.units.Quantity`, optional
         Side of the surface cells (default 30 Mm).
     pointing : `~astropy.units.Quantity`, optional
@@ -289,6 +292,8 @@ def library_scene(library, *, obstime=None, instrument=None, detector_shape=None
     terms = _velocity_terms(velocities)
     if library.meta.get("spectra_carry_blueshift"):
         terms["blueshift"] = False      # the 3-D Sun's granulation shifts its own spectra
+    if library.meta.get("spectra_carry_supergranulation") or network is None:
+        terms["supergranulation"] = False   # the column photosphere's patches hold their own; no cells
     time = as_obstime(obstime)
     _, _, det = sky_grid(inst, detector_shape=detector_shape)
     grid = (det[0] * supersampling, det[1] * supersampling)
@@ -296,7 +301,7 @@ def library_scene(library, *, obstime=None, instrument=None, detector_shape=None
     large = large_scale_grid(time, surface_field, site=site, rotation=terms["rotation"],
                              observer=terms["observer"],
                              blueshift=CONVECTIVE_BLUESHIFT_FE6302 if terms["blueshift"] else None,
-                             network=network)
+                             network=network, supergranulation=terms["supergranulation"])
     n_planes = len(inst.analysers)
     blos = np.zeros(grid, dtype=np.float32)
     to_earth = radiance_at_earth(1 * CHANNEL_UNIT)

@@ -166,8 +166,9 @@ def full_disk_scene(source, *, obstime=None, instrument=None, detector_shape=Non
         observer's velocity; default the Earth's centre.
     velocities : bool or dict, optional
         Library only: shift the spectra by the large-scale velocity (True:
-        rotation, observer and convective blueshift; False: none; a dict
-        switches them one by one, keys ``rotation``, ``observer``, ``blueshift``).
+        rotation, observer, convective blueshift and, with a network, its
+        supergranular flow; False: none; a dict switches them one by one, keys
+        ``rotation``, ``observer``, ``blueshift``, ``supergranulation``).
     cell_size : `~astropy.units.Quantity`, optional
         Library only: side of the surface cells (default `DEFAULT_CELL`).
     pointing : `~astropy.units.Quantity`, optional

@@ -330,7 +330,9 @@ def build_library(*, seed=0, shape=(256, 256), pixel_size=384 * u.km, seeds_per_
     meta = {"levels": names, "seed_entropy": str(root.entropy),
             "knobs": {k: str(v) for k, v in knobs.items()},
             "seeds_per_level": list(seeds_per_level), "patch_net_G": [round(v, 3) for v in level_net],
-            "basis_rank": basis.rank, "basis_error": basis.error}
+            "basis_rank": basis.rank, "basis_error": basis.error,
+            # The column photosphere's patches hold 25 Mm supergranules with their outflow.
+            "spectra_carry_supergranulation": True}
     return PatchLibrary(patches=patches, uniform=uniform, theta=theta, level_net=net,
                         level_patches=tuple(level_patches),
                         level_uniform=tuple([-1] * len(levels) + list(range(len(strong_fields)))),

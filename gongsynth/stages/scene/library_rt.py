@@ -32,6 +32,15 @@ from the built-in 3-D Sun:
   library's angles and interpolates it in between.  The truth is the same
   quantity for every line (τ_c at the line's own wavelength).
 
+The patches' granulation keeps no flow beyond `PATCH_FLOW_CUTOFF` (10 Mm,
+`model_atmosphere`'s ``flow_cutoff``): granules and mesogranules (5-10 Mm,
+Rincon & Rieutord 2018, Living Rev. Sol. Phys. 15, 6, §2.1.4) are theirs,
+while the supergranular flow is the disk's, one pattern with the network
+(`gongsynth.sun.surface_field.supergranulation`).  A patch of one surface
+cell would otherwise carry, from its granulation's large-scale tail,
+horizontal flows of 300-700 m/s rms over 14 Mm (measured at 200 km, two
+seeds), a second and random supergranulation cut at the cells' edges.
+
 The rows are divided by, and the renderer multiplies them again by, the
 continuum limb darkening of the Milne-Eddington description of the instrument's
 line (`gongsynth.sun.photosphere.me_line`: Neckel & Labs at 676.8 or 617.3 nm):
@@ -74,8 +83,8 @@ from gongsynth.sun.photosphere import me_line
 from gongsynth.sun.rt import default_wavelength, get_line
 from gongsynth.sun.rt import synthesize as rt_synthesize
 
-__all__ = ["ATMOSPHERE_LEVELS", "STRONG_COLUMNS", "ATMOSPHERE_THETA", "TILED_COLUMN", "atmosphere_grid",
-           "build_atmosphere_library"]
+__all__ = ["ATMOSPHERE_LEVELS", "STRONG_COLUMNS", "ATMOSPHERE_THETA", "TILED_COLUMN", "PATCH_FLOW_CUTOFF",
+           "atmosphere_grid", "build_atmosphere_library"]
 
 
 def _as_atmosphere_knobs(knobs):
@@ -95,6 +104,10 @@ STRONG_COLUMNS = (("penumbra", "penumbra_field"), ("umbra", "umbra_field"))
 
 #: Default viewing angles (deg) of the 3-D library: every 15° in μ-spacing to 76°, then toward the limb.
 ATMOSPHERE_THETA = (0.0, 30.0, 48.0, 61.0, 72.0, 81.0, 87.0)
+
+#: The largest scale of the patches' granular flow (`model_atmosphere`'s ``flow_cutoff``): above it
+#: the disk's supergranular flow takes over (see the module docstring).
+PATCH_FLOW_CUTOFF = 10 * u.Mm
 
 #: The column size of a tiled run's 3-D Sun (`gongsynth.suns.RUN_GRIDS`): the finest a library takes.
 TILED_COLUMN = 384 * u.km
@@ -187,7 +200,8 @@ def build_atmosphere_library(*, seed=0, shape=None, pixel_size=None,
         Viewing angles in deg, increasing from 0 to below 90 (default `ATMOSPHERE_THETA`).
     knobs : dict, optional
         `model_atmosphere` knobs of the run's built-in Sun (``[photosphere]``);
-        the levels override theirs, and ``spot`` is off.
+        the levels override theirs, ``spot`` is off and ``flow_cutoff``, unless
+        given, is `PATCH_FLOW_CUTOFF`.
     wavelength : `~astropy.units.Quantity`, optional
         Spectral grid (default: `gongsynth.sun.rt.default_wavelength` of the
         line, for Ni I the paper's 51 points).
@@ -236,6 +250,8 @@ def build_atmosphere_library(*, seed=0, shape=None, pixel_size=None,
     knobs = dict(knobs or {})
     for fixed in ("shape", "pixel_size", "seed", "spot"):
         knobs.pop(fixed, None)
+    if knobs.get("flow_cutoff") is None:
+        knobs["flow_cutoff"] = PATCH_FLOW_CUTOFF
     root = as_seed_sequence(seed)
     n_spec = k_row - 2
     ny, nx = shape

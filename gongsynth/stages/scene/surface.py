@@ -15,7 +15,10 @@ for the run's date and observer:
   the map does not know (NaN, or outside it) are 0: the quiet Sun.  No map:
   0 everywhere;
 - the large-scale Doppler velocity, `gongsynth.sun.rotation.disk_velocity`:
-  differential rotation, the observer's motion, the convective blueshift.
+  differential rotation, the observer's motion, the convective blueshift;
+  with a network, also the supergranular flow of its cells
+  (`gongsynth.sun.surface_field.supergranulation`) seen along each line of
+  sight: outflows toward the walls where the network lies.
 
 The scene interpolates both bilinearly at each of its samples; they vary
 over degrees, the grid spacing is a quarter of one by default.
@@ -29,6 +32,7 @@ from astropy.coordinates import SkyCoord
 from gongsynth.geometry import as_obstime
 from gongsynth.sun.rotation import CONVECTIVE_BLUESHIFT_FE6302, disk_velocity
 from gongsynth.sun.surface_field.maps import check_surface_field, surface_field_at
+from gongsynth.sun.surface_field.supergranulation import supergranular_flow
 from gongsynth.validation import check_quantity
 
 __all__ = ["LargeScale", "sample_surface_field", "large_scale_grid"]
@@ -130,7 +134,8 @@ def sample_surface_field(smap, longitude, latitude, obstime=None):
 
 
 def large_scale_grid(obstime=None, surface_field=None, *, step=0.25 * u.deg, site=None,
-                     rotation=True, observer=True, blueshift=CONVECTIVE_BLUESHIFT_FE6302, network=None):
+                     rotation=True, observer=True, blueshift=CONVECTIVE_BLUESHIFT_FE6302, network=None,
+                     supergranulation=True):
     """
     The radial field and the large-scale velocity on a regular Stonyhurst grid.
 
@@ -152,6 +157,10 @@ def large_scale_grid(obstime=None, surface_field=None, *, step=0.25 * u.deg, sit
     network : `~gongsynth.sun.surface_field.network.SupergranularNetwork`, optional
         Lays the magnetic network on the grid: the field's quiet part carried
         by flux concentrations on supergranular cell walls; None: the field as it is.
+    supergranulation : bool
+        With a network: add its cells' supergranular flow to the velocity
+        (`~gongsynth.sun.surface_field.supergranulation.supergranular_flow`).
+        No effect without a network.
 
     Returns
     -------
@@ -189,12 +198,20 @@ def large_scale_grid(obstime=None, surface_field=None, *, step=0.25 * u.deg, sit
     sight = np.array([distance * np.cos(b0), 0.0, distance * np.sin(b0)])[:, None, None] - point
     facing = (point * sight).sum(axis=0) / np.sqrt((sight ** 2).sum(axis=0))
     mu = np.clip(facing, 0.0, 1.0)
-    if network is not None:   # on the visible side and a degree beyond: the scene samples nothing else
-        field = network.on_grid(lon, lat, field, where=facing > -0.02)
+    visible = facing > -0.02     # the visible side and a degree beyond: the scene samples nothing else
+    if network is not None:
+        field = network.on_grid(lon, lat, field, where=visible)
     velocity = disk_velocity(glon * u.deg, glat * u.deg, mu, time, site=site, rotation=rotation,
                              observer=observer, blueshift=blueshift).to_value(u.m / u.s)
+    flow = network is not None and supergranulation
+    if flow:
+        at = point[:, visible].T
+        vector = supergranular_flow(network.cells()[0], at).to_value(u.m / u.s)
+        toward = sight[:, visible].T
+        # Positive away from the observer: minus the flow's component toward it.
+        velocity[visible] -= (vector * toward).sum(axis=1) / np.linalg.norm(toward, axis=1)
     meta = {"obstime": time.isot, "step_deg": dstep, "surface_field": None if surface_field is None
             else str(getattr(surface_field, "name", "map")), "site": None if site is None else str(site),
             "rotation": bool(rotation), "observer": bool(observer), "blueshift": blueshift is not None,
-            "network": None if network is None else repr(network)}
+            "network": None if network is None else repr(network), "supergranulation": bool(flow)}
     return LargeScale(longitude=lon, latitude=lat, field=field, velocity=velocity, meta=meta)

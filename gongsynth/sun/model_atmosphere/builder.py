@@ -202,7 +202,8 @@ def model_atmosphere(shape=(1024, 1024), pixel_size=96 * u.km, *, seed, nz=80,
                      internetwork_horizontal_field=50 * u.G, umbra_radius=7 * u.Mm,
                      penumbra_radius=16 * u.Mm, umbra_field=3000 * u.G, penumbra_field=1500 * u.G,
                      umbra_model="maltby-m", evershed_speed=2.0 * u.km / u.s, moat_speed=0.8 * u.km / u.s,
-                     microturbulence=0.6 * u.km / u.s, network="auto", supergranule_size=30 * u.Mm):
+                     microturbulence=0.6 * u.km / u.s, network="auto", supergranule_size=30 * u.Mm,
+                     flow_cutoff=None):
     """
     A seeded, horizontally periodic 3-D model photosphere for LTE Stokes synthesis.
 
@@ -279,6 +280,17 @@ def model_atmosphere(shape=(1024, 1024), pixel_size=96 * u.km, *, seed, nz=80,
     supergranule_size : `~astropy.units.Quantity`, optional
         With ``network``: mean spacing of the cell centres (30 Mm, Rieutord &
         Rincon 2010); it must fit in the box.
+    flow_cutoff : `~astropy.units.Quantity` or None, optional
+        The largest scale of the granular flow: the vertical-velocity
+        pattern's Fourier components of wavelength λ beyond it are taken out
+        (× 1 − exp(−(λ_cut/λ)²)) before the anelastic outflow is derived from
+        it.  A granulation of random cells has a white tail of vertical
+        velocity at large scales (~10-40 m/s over tens of Mm), which
+        continuity turns into horizontal flows of hundreds of m/s there
+        (v_h ~ v_z / kH); where a supergranular flow of its own is laid over
+        the box (the full disk's library patches,
+        `gongsynth.sun.surface_field.supergranulation`), these would be a
+        second, random one.  None (default): every scale the box holds.
 
     Returns
     -------
@@ -307,7 +319,7 @@ def model_atmosphere(shape=(1024, 1024), pixel_size=96 * u.km, *, seed, nz=80,
                           positive_fraction, internetwork_field, internetwork_horizontal_field,
                           umbra_radius, penumbra_radius, umbra_field, penumbra_field, umbra_model,
                           evershed_speed, moat_speed, microturbulence, network,
-                          supergranule_size)).atmosphere()
+                          supergranule_size, flow_cutoff)).atmosphere()
 
 
 def _plan(shape, pixel_size, seed, nz, height_range, spot, granule_size, granulation_models,
@@ -315,7 +327,7 @@ def _plan(shape, pixel_size, seed, nz, height_range, spot, granule_size, granula
           element_field, element_model, element_depression, canopy, positive_fraction, internetwork_field,
           internetwork_horizontal_field, umbra_radius, penumbra_radius, umbra_field, penumbra_field,
           umbra_model, evershed_speed, moat_speed, microturbulence, network="auto",
-          supergranule_size=30 * u.Mm):
+          supergranule_size=30 * u.Mm, flow_cutoff=None):
     """`model_atmosphere`'s arguments checked and its whole-plane (2-D) ingredients made, as a dict."""
     if (not isinstance(shape, (tuple, list)) or len(shape) != 2
             or not all(isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 8
@@ -359,6 +371,7 @@ def _plan(shape, pixel_size, seed, nz, height_range, spot, granule_size, granula
     v_m = check_scalar(moat_speed, u.km / u.s, "moat_speed", positive=False)
     v_t = check_scalar(microturbulence, u.km / u.s, "microturbulence", positive=False)
     sg = check_scalar(supergranule_size, u.km, "supergranule_size")
+    cut = None if flow_cutoff is None else check_scalar(flow_cutoff, u.km, "flow_cutoff")
     for name, value in (("element_field", b_el), ("umbra_field", b_u), ("penumbra_field", b_p)):
         if value > 6000:
             raise ValueError(f"{name} must be <= 6000 G, got {value} G")
@@ -410,6 +423,8 @@ def _plan(shape, pixel_size, seed, nz, height_range, spot, granule_size, granula
     h, s = anelastic_profile(zg, ref["density"], h_v)
     quiet = (1 - f_el) * (1 - sp["mask"])
     vz0 = vpat * quiet
+    if cut is not None:
+        vz0 = grid.high_pass(vz0, cut) * quiet     # the elements and the spot keep no granular flow
     vz0 -= vz0.mean()
     vz0 *= v_g / (np.sqrt(np.sum(vz0 ** 2) / max(quiet.sum(), 1.0)) or 1.0)
     gx, gy = grid.gradient(grid.inverse_laplacian(vz0))
@@ -449,6 +464,8 @@ def _plan(shape, pixel_size, seed, nz, height_range, spot, granule_size, granula
     if network:     # only then: the default's metadata stays as it was
         meta["params"].update(network=True, supergranule_size_km=sg)
         meta["network"] = {"cells": lay["cells"], "ephemeral_regions": lay["fluxes"].size // 2}
+    if cut is not None:
+        meta["params"].update(flow_cutoff_km=cut)
     # Per-row planes (indexed by the kernels' row j), then the height profiles and tables.
     return dict(grid=grid, z=zg, pixel_size=px, microturbulence=v_t, meta=meta, spectra=spectra, bases=bases,
                 base_field=None if canopy else bz_el,

@@ -76,6 +76,11 @@ class PeriodicGrid:
         """Periodic Gaussian smoothing (flux-conserving)."""
         return self.ifft(self.fft(field) * np.exp(-0.5 * sigma_km ** 2 * self.k ** 2))
 
+    def high_pass(self, field, wavelength_km):
+        """The field without its scales beyond ``wavelength_km``: spectrum × (1 − exp(−(k λ / 2π)²))."""
+        x = (self.k * wavelength_km / (2 * math.pi)) ** 2
+        return self.ifft(self.fft(field) * -np.expm1(-x))
+
     def gradient(self, field):
         """(∂/∂x, ∂/∂y) per km, spectrally."""
         f = self.fft(field)

@@ -10,6 +10,9 @@ The large-scale field of the whole Sun: B_r on a Carrington grid, from a real ma
   Spörer's, Hale's and Joy's laws, polar fields).
 - `gongsynth.sun.surface_field.synthetic`: `synthetic_surface_field`, a seeded
   Sun at the cycle phase of its date.
+- `gongsynth.sun.surface_field.network`: the magnetic network on supergranular
+  cells, laid over the large-scale field on a full-disk scene's grid, and
+  `gongsynth.sun.surface_field.supergranulation`: the same cells' flow.
 """
 from gongsynth.sun.surface_field.maps import fill_unobserved, surface_field_at
 from gongsynth.sun.surface_field.observed import surface_field_from_map

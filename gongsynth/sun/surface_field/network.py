@@ -181,6 +181,33 @@ class SupergranularNetwork:
         if np.ndim(er) or not er.value >= 0:
             raise ValueError(f"ephemeral_flux_density must be a scalar >= 0, got {er}")
 
+    def cells(self):
+        """
+        The supergranules: their centres and their own signs.
+
+        Returns
+        -------
+        centres : `numpy.ndarray`
+            (n, 3) unit vectors of the cell centres (Stonyhurst axes: x to the
+            central meridian, z to the north pole), uniform on the sphere, n
+            the Sun's area over ``cell_size``².
+        signs : `numpy.ndarray`
+            (n,) ±1: the polarity each cell's network leans to.
+
+        Examples
+        --------
+        >>> centres, signs = SupergranularNetwork(seed=1).cells()
+        >>> centres.shape, sorted(set(signs.tolist()))
+        ((6758, 3), [-1.0, 1.0])
+        """
+        r_km = solar_radius.to_value(u.km)
+        rng = stage_generator(as_seed_sequence(self.seed), "network", _CENTRES)
+        spacing = self.cell_size.to_value(u.km)
+        n_cells = max(4, int(round(4 * math.pi * r_km ** 2 / spacing ** 2)))
+        centres = rng.standard_normal((n_cells, 3))
+        centres /= np.linalg.norm(centres, axis=1)[:, None]
+        return centres, np.where(rng.uniform(size=n_cells) < 0.5, -1.0, 1.0)
+
     def on_grid(self, longitude, latitude, large_scale, where=None):
         """
         The radial flux density of the large-scale field with its quiet part carried by the network.
@@ -212,13 +239,7 @@ class SupergranularNetwork:
             raise ValueError(f"large_scale must have shape {(lat.size, lon.size)}, got {field.shape}")
         r_km = solar_radius.to_value(u.km)
         root = as_seed_sequence(self.seed)
-        # Supergranule centres, uniform on the sphere.
-        rng = stage_generator(root, "network", _CENTRES)
-        spacing = self.cell_size.to_value(u.km)
-        n_cells = max(4, int(round(4 * math.pi * r_km ** 2 / spacing ** 2)))
-        centres = rng.standard_normal((n_cells, 3))
-        centres /= np.linalg.norm(centres, axis=1)[:, None]
-        cell_sign = np.where(rng.uniform(size=n_cells) < 0.5, -1.0, 1.0)
+        centres, cell_sign = self.cells()
         # Distance of every grid point to the nearest cell wall (chords: the cells are small).
         glat, glon = np.meshgrid(lat, lon, indexing="ij")
         inside = np.ones(field.shape, dtype=bool) if where is None else np.asarray(where, dtype=bool)
