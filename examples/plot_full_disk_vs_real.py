@@ -197,9 +197,11 @@ ax.legend()
 # granules and noise leave in GONG's pixels.  The zooms, 300″ west of disk
 # centre, show the flow the scene was given (the network's cells, stream
 # ``"network"`` of the run's seed, along each line of sight) and what GONG
-# measured: each cell's half toward disk centre recedes (red), its half toward
-# the limb approaches (blue), and the magnetogram's network (contours of the
-# smoothed :math:`|B|` at 20 G) lies where the outflows of neighbouring cells meet.
+# measured: each cell's half toward the limb flows away from us (red), its half
+# toward disk centre toward us (blue), so that, going west, blue turns red at a
+# cell's centre and red turns blue on its wall, where the outflows of
+# neighbouring cells meet and the magnetogram's network lies (contours of the
+# smoothed :math:`|B|` at 20 G).
 
 with np.errstate(invalid="ignore"):
     large_scale = disk_velocity(g.longitude * u.deg, g.latitude * u.deg, g.mu, config.obstime,
