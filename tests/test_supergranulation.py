@@ -121,6 +121,24 @@ def test_line_of_sight_signal_grows_toward_the_limb():
     assert not np.any(with_flow.velocity[mu < -0.03])
 
 
+def test_a_cells_limbward_half_recedes():
+    """West of disk centre a cell's outflow toward the limb moves away from the observer: a redshift."""
+    from sunpy.coordinates import sun
+    net = SupergranularNetwork(seed=3)
+    grid = large_scale_grid(DATE, network=net, rotation=False, observer=False, blueshift=None)
+    centres = net.cells()[0]
+    b0 = sun.B0(DATE).to_value(u.rad)
+    # The cell centre nearest to 40° west on the disk's central row (latitude B0 seen face on: lat 0 here).
+    target = unit([np.cos(np.radians(40)), np.sin(np.radians(40)), 0.0])
+    c = centres[np.argmax(centres @ target)]
+    lon, lat = np.degrees(np.arctan2(c[1], c[0])), np.degrees(np.arcsin(c[2]))
+    row = np.argmin(np.abs(grid.latitude - lat))
+    step = 6.0 / 696.0 * 180 / np.pi / np.cos(np.radians(lat))      # 6 Mm along the row, in degrees
+    limbward = grid.velocity[row, np.argmin(np.abs(grid.longitude - (lon + step)))]
+    centreward = grid.velocity[row, np.argmin(np.abs(grid.longitude - (lon - step)))]
+    assert abs(b0) < 0.2 and limbward > 50 and centreward < -50
+
+
 def test_the_network_sits_in_the_flows_downdrafts():
     """The network's flux, weighted, lies where the flow sinks and converges: near the cells' walls."""
     net = SupergranularNetwork(seed=4, ephemeral_flux_density=0 * u.G)
