@@ -190,7 +190,7 @@ class SupergranularNetwork:
         centres : `numpy.ndarray`
             (n, 3) unit vectors of the cell centres (Stonyhurst axes: x to the
             central meridian, z to the north pole), uniform on the sphere, n
-            the Sun's area over ``cell_size``².
+            the Sun's area over the square of ``cell_size``.
         signs : `numpy.ndarray`
             (n,) ±1: the polarity each cell's network leans to.
 
