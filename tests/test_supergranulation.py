@@ -170,7 +170,7 @@ def test_a_patch_keeps_its_granular_flow_and_loses_its_large_scale_tail():
         k = int(np.argmin(np.abs(z - 200)))
         return v[:2, k], v[2, int(np.argmin(np.abs(z)))], atm.meta["params"]
 
-    (h_all, vz_all, p_all), (h_cut, vz_cut, p_cut) = flows(None), flows(10 * u.Mm)
+    (h_all, vz_all, p_all), (h_cut, vz_cut, p_cut) = flows(0 * u.Mm), flows(10 * u.Mm)
     assert "flow_cutoff_km" not in p_all and p_cut["flow_cutoff_km"] == 10000.0
 
     def smoothed(h):

@@ -250,7 +250,7 @@ def build_atmosphere_library(*, seed=0, shape=None, pixel_size=None,
     knobs = dict(knobs or {})
     for fixed in ("shape", "pixel_size", "seed", "spot"):
         knobs.pop(fixed, None)
-    if knobs.get("flow_cutoff") is None:
+    if not knobs.get("flow_cutoff", 0 * u.Mm) > 0:      # not given: the disk's supergranulation takes over
         knobs["flow_cutoff"] = PATCH_FLOW_CUTOFF
     root = as_seed_sequence(seed)
     n_spec = k_row - 2

@@ -203,7 +203,7 @@ def model_atmosphere(shape=(1024, 1024), pixel_size=96 * u.km, *, seed, nz=80,
                      penumbra_radius=16 * u.Mm, umbra_field=3000 * u.G, penumbra_field=1500 * u.G,
                      umbra_model="maltby-m", evershed_speed=2.0 * u.km / u.s, moat_speed=0.8 * u.km / u.s,
                      microturbulence=0.6 * u.km / u.s, network="auto", supergranule_size=30 * u.Mm,
-                     flow_cutoff=None):
+                     flow_cutoff=0 * u.Mm):
     """
     A seeded, horizontally periodic 3-D model photosphere for LTE Stokes synthesis.
 
@@ -280,7 +280,7 @@ def model_atmosphere(shape=(1024, 1024), pixel_size=96 * u.km, *, seed, nz=80,
     supergranule_size : `~astropy.units.Quantity`, optional
         With ``network``: mean spacing of the cell centres (30 Mm, Rieutord &
         Rincon 2010); it must fit in the box.
-    flow_cutoff : `~astropy.units.Quantity` or None, optional
+    flow_cutoff : `~astropy.units.Quantity`, optional
         The largest scale of the granular flow: the vertical-velocity
         pattern's Fourier components of wavelength λ beyond it are taken out
         (× 1 − exp(−(λ_cut/λ)²)) before the anelastic outflow is derived from
@@ -290,7 +290,7 @@ def model_atmosphere(shape=(1024, 1024), pixel_size=96 * u.km, *, seed, nz=80,
         (v_h ~ v_z / kH); where a supergranular flow of its own is laid over
         the box (the full disk's library patches,
         `gongsynth.sun.surface_field.supergranulation`), these would be a
-        second, random one.  None (default): every scale the box holds.
+        second, random one.  0 (default): every scale the box holds.
 
     Returns
     -------
@@ -327,7 +327,7 @@ def _plan(shape, pixel_size, seed, nz, height_range, spot, granule_size, granula
           element_field, element_model, element_depression, canopy, positive_fraction, internetwork_field,
           internetwork_horizontal_field, umbra_radius, penumbra_radius, umbra_field, penumbra_field,
           umbra_model, evershed_speed, moat_speed, microturbulence, network="auto",
-          supergranule_size=30 * u.Mm, flow_cutoff=None):
+          supergranule_size=30 * u.Mm, flow_cutoff=0 * u.Mm):
     """`model_atmosphere`'s arguments checked and its whole-plane (2-D) ingredients made, as a dict."""
     if (not isinstance(shape, (tuple, list)) or len(shape) != 2
             or not all(isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 8
@@ -371,7 +371,7 @@ def _plan(shape, pixel_size, seed, nz, height_range, spot, granule_size, granula
     v_m = check_scalar(moat_speed, u.km / u.s, "moat_speed", positive=False)
     v_t = check_scalar(microturbulence, u.km / u.s, "microturbulence", positive=False)
     sg = check_scalar(supergranule_size, u.km, "supergranule_size")
-    cut = None if flow_cutoff is None else check_scalar(flow_cutoff, u.km, "flow_cutoff")
+    cut = check_scalar(flow_cutoff, u.km, "flow_cutoff", positive=False)
     for name, value in (("element_field", b_el), ("umbra_field", b_u), ("penumbra_field", b_p)):
         if value > 6000:
             raise ValueError(f"{name} must be <= 6000 G, got {value} G")
@@ -423,7 +423,7 @@ def _plan(shape, pixel_size, seed, nz, height_range, spot, granule_size, granula
     h, s = anelastic_profile(zg, ref["density"], h_v)
     quiet = (1 - f_el) * (1 - sp["mask"])
     vz0 = vpat * quiet
-    if cut is not None:
+    if cut > 0:
         vz0 = grid.high_pass(vz0, cut) * quiet     # the elements and the spot keep no granular flow
     vz0 -= vz0.mean()
     vz0 *= v_g / (np.sqrt(np.sum(vz0 ** 2) / max(quiet.sum(), 1.0)) or 1.0)
@@ -464,7 +464,7 @@ def _plan(shape, pixel_size, seed, nz, height_range, spot, granule_size, granula
     if network:     # only then: the default's metadata stays as it was
         meta["params"].update(network=True, supergranule_size_km=sg)
         meta["network"] = {"cells": lay["cells"], "ephemeral_regions": lay["fluxes"].size // 2}
-    if cut is not None:
+    if cut > 0:
         meta["params"].update(flow_cutoff_km=cut)
     # Per-row planes (indexed by the kernels' row j), then the height profiles and tables.
     return dict(grid=grid, z=zg, pixel_size=px, microturbulence=v_t, meta=meta, spectra=spectra, bases=bases,
