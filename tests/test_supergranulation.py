@@ -184,3 +184,44 @@ def test_a_patch_keeps_its_granular_flow_and_loses_its_large_scale_tail():
     assert vz_cut.std() == pytest.approx(vz_all.std(), rel=0.02)
     with pytest.raises(ValueError, match="flow_cutoff"):
         model_atmosphere((16, 16), seed=1, nz=40, flow_cutoff=-1 * u.Mm)
+
+
+def test_a_tiled_box_with_supergranulation_adds_its_cells_flow_at_every_height():
+    """
+    ``supergranulation``: the velocity is that of the same box with the granular flow cut at 10 Mm plus
+    one flow the same at every height (to float32 rounding, < 0.01 m/s), of 350 m/s rms horizontal and
+    25 m/s rms vertical with no mean; temperature, pressure and field keep their bits.
+    """
+    args = dict(seed=3, nz=40, spot=False, network=True, supergranule_size=10 * u.Mm)
+    cut = model_atmosphere((64, 64), pixel_size=384 * u.km, flow_cutoff=10 * u.Mm, **args)
+    flowing = model_atmosphere((64, 64), pixel_size=384 * u.km, supergranulation=True, **args)
+    assert flowing.meta["params"]["supergranulation"] and flowing.meta["params"]["flow_cutoff_km"] == 10000
+    added = flowing.raw("velocity").astype(float) - cut.raw("velocity").astype(float)     # km/s
+    added *= 1e3
+    assert np.abs(added - added[:, :1]).max() < 0.01
+    vx, vy, vz = added[:, 0]
+    assert np.sqrt(np.mean(vx ** 2 + vy ** 2)) == pytest.approx(350, rel=1e-4)
+    assert vz.std() == pytest.approx(25, rel=1e-3) and abs(vz.mean()) < 0.01
+    for name in ("temperature", "gas_pressure", "magnetic_field"):
+        assert np.array_equal(flowing.raw(name), cut.raw(name)), name
+    with pytest.raises(ValueError, match="supergranulation needs the network"):
+        model_atmosphere((16, 16), seed=1, nz=40, network=False, supergranulation=True)
+
+
+def test_the_periodic_cells_flow_outward_across_the_wrap():
+    """`cell_flow` in a periodic box: away from each column's own centre (minimum image), still on walls."""
+    from gongsynth.sun.model_atmosphere.granulation import PeriodicGrid
+    from gongsynth.sun.model_atmosphere.network_layout import cell_centres, cell_flow
+    from gongsynth.sun.photosphere.voronoi import cell_walls
+
+    grid = PeriodicGrid(96, 128, 384.0)
+    centres = cell_centres(grid, np.random.default_rng(2), 12000.0)
+    vx, vy, vz = cell_flow(grid, centres)
+    wall, _, cell = cell_walls(grid, centres)
+    y, x = grid.coords()
+    dx = (x - centres[cell, 0] + grid.Lx / 2) % grid.Lx - grid.Lx / 2
+    dy = (y - centres[cell, 1] + grid.Ly / 2) % grid.Ly - grid.Ly / 2
+    assert np.all(vx * dx + vy * dy >= -1e-9)
+    near_wall = wall < 0.005 * 12000.0                      # sin(πs) ≈ π (1 - s) there: a few % of the peak
+    assert near_wall.sum() > 20 and np.hypot(vx, vy)[near_wall].max() < 0.1 * np.hypot(vx, vy).max()
+    assert vz[near_wall].mean() < 0 < vz[wall > 0.3 * 12000.0].mean()

@@ -82,6 +82,7 @@ from gongsynth.sun.model_atmosphere.builder import reference_stratifications
 from gongsynth.sun.photosphere import me_line
 from gongsynth.sun.rt import default_wavelength, get_line
 from gongsynth.sun.rt import synthesize as rt_synthesize
+from gongsynth.sun.surface_field.supergranulation import GRANULAR_FLOW_SCALE
 
 __all__ = ["ATMOSPHERE_LEVELS", "STRONG_COLUMNS", "ATMOSPHERE_THETA", "TILED_COLUMN", "PATCH_FLOW_CUTOFF",
            "atmosphere_grid", "build_atmosphere_library"]
@@ -107,7 +108,7 @@ ATMOSPHERE_THETA = (0.0, 30.0, 48.0, 61.0, 72.0, 81.0, 87.0)
 
 #: The largest scale of the patches' granular flow (`model_atmosphere`'s ``flow_cutoff``): above it
 #: the disk's supergranular flow takes over (see the module docstring).
-PATCH_FLOW_CUTOFF = 10 * u.Mm
+PATCH_FLOW_CUTOFF = GRANULAR_FLOW_SCALE
 
 #: The column size of a tiled run's 3-D Sun (`gongsynth.suns.RUN_GRIDS`): the finest a library takes.
 TILED_COLUMN = 384 * u.km

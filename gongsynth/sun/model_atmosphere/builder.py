@@ -46,9 +46,10 @@ from gongsynth.sun.model_atmosphere import flux_elements as fe
 from gongsynth.sun.model_atmosphere import stratification as st
 from gongsynth.sun.model_atmosphere._rows import blend_rows, flow_rows, internetwork_rows
 from gongsynth.sun.model_atmosphere.granulation import PeriodicGrid, anelastic_profile, granulation_pattern
-from gongsynth.sun.model_atmosphere.network_layout import network_layout
+from gongsynth.sun.model_atmosphere.network_layout import cell_flow, network_layout
 from gongsynth.sun.model_atmosphere.sunspot import spot_structure
 from gongsynth.sun.rt.eos import solve_state
+from gongsynth.sun.surface_field.supergranulation import GRANULAR_FLOW_SCALE
 from gongsynth.threads import run_chunks
 from gongsynth.validation import check_quantity, check_scalar
 
@@ -173,6 +174,9 @@ def assemble_rows(plan, rows, magnetic_field=None):
     vel = np.empty((3,) + temp.shape, dtype=np.float32)
     h, s, flows = plan["flow_profiles"]
     run_chunks(flow_rows, nr, h, s, flows, *(pick(p_) for p_ in plan["flow"]), vel)
+    if plan.get("supergranular") is not None:      # the cells' flow, the same at every height
+        for component, plane in enumerate(plan["supergranular"]):
+            vel[component] += pick(plane).astype(np.float32)[None]
     if plan["base_field"] is not None:
         magnetic_field[2] += pick(plan["base_field"]).astype(np.float32)
     run_chunks(internetwork_rows, nr, *plan["internetwork_profiles"],
@@ -203,7 +207,7 @@ def model_atmosphere(shape=(1024, 1024), pixel_size=96 * u.km, *, seed, nz=80,
                      penumbra_radius=16 * u.Mm, umbra_field=3000 * u.G, penumbra_field=1500 * u.G,
                      umbra_model="maltby-m", evershed_speed=2.0 * u.km / u.s, moat_speed=0.8 * u.km / u.s,
                      microturbulence=0.6 * u.km / u.s, network="auto", supergranule_size=30 * u.Mm,
-                     flow_cutoff=0 * u.Mm):
+                     flow_cutoff=0 * u.Mm, supergranulation=False):
     """
     A seeded, horizontally periodic 3-D model photosphere for LTE Stokes synthesis.
 
@@ -291,6 +295,16 @@ def model_atmosphere(shape=(1024, 1024), pixel_size=96 * u.km, *, seed, nz=80,
         the box (the full disk's library patches,
         `gongsynth.sun.surface_field.supergranulation`), these would be a
         second, random one.  0 (default): every scale the box holds.
+    supergranulation : bool, optional
+        With the network: its cells flow, as the full disk's do
+        (`~gongsynth.sun.model_atmosphere.network_layout.cell_flow`: outflow
+        from each centre to the walls, 350 m/s rms, 25 m/s up in the middles
+        and down at the walls; Rincon & Rieutord 2018), the same at every
+        height, stopped at a sunspot; the granulation's own flow then ends at
+        ``flow_cutoff`` or, if that is 0,
+        `~gongsynth.sun.surface_field.supergranulation.GRANULAR_FLOW_SCALE`
+        (10 Mm).  Off by default: the shipped calibration tables were built
+        without it.
 
     Returns
     -------
@@ -319,7 +333,7 @@ def model_atmosphere(shape=(1024, 1024), pixel_size=96 * u.km, *, seed, nz=80,
                           positive_fraction, internetwork_field, internetwork_horizontal_field,
                           umbra_radius, penumbra_radius, umbra_field, penumbra_field, umbra_model,
                           evershed_speed, moat_speed, microturbulence, network,
-                          supergranule_size, flow_cutoff)).atmosphere()
+                          supergranule_size, flow_cutoff, supergranulation)).atmosphere()
 
 
 def _plan(shape, pixel_size, seed, nz, height_range, spot, granule_size, granulation_models,
@@ -327,7 +341,7 @@ def _plan(shape, pixel_size, seed, nz, height_range, spot, granule_size, granula
           element_field, element_model, element_depression, canopy, positive_fraction, internetwork_field,
           internetwork_horizontal_field, umbra_radius, penumbra_radius, umbra_field, penumbra_field,
           umbra_model, evershed_speed, moat_speed, microturbulence, network="auto",
-          supergranule_size=30 * u.Mm, flow_cutoff=0 * u.Mm):
+          supergranule_size=30 * u.Mm, flow_cutoff=0 * u.Mm, supergranulation=False):
     """`model_atmosphere`'s arguments checked and its whole-plane (2-D) ingredients made, as a dict."""
     if (not isinstance(shape, (tuple, list)) or len(shape) != 2
             or not all(isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 8
@@ -344,7 +358,8 @@ def _plan(shape, pixel_size, seed, nz, height_range, spot, granule_size, granula
     if not (z_lo <= -200 and z_hi >= 400):
         raise ValueError(f"height_range must reach at least 200 km below and 400 km above tau = 1, got "
                          f"{height_range}")
-    for name, value in (("element_depression", element_depression), ("canopy", canopy)):
+    for name, value in (("element_depression", element_depression), ("canopy", canopy),
+                        ("supergranulation", supergranulation)):
         if not isinstance(value, (bool, np.bool_)):
             raise ValueError(f"{name} must be True or False, got {value!r}")
     if not (isinstance(network, (bool, np.bool_)) or network == "auto"):
@@ -386,6 +401,12 @@ def _plan(shape, pixel_size, seed, nz, height_range, spot, granule_size, granula
     # "auto": the network needs a few cells to form a pattern; boxes under 2 cells a side keep the
     # noise clustering (test boxes, the full disk's one-cell library patches).
     network = bool(network if isinstance(network, (bool, np.bool_)) else min(ny, nx) * px >= 2 * sg)
+    if supergranulation and not network:
+        raise ValueError("supergranulation needs the network's cells: network must be on (True, or 'auto' "
+                         "in a box of at least 2 x supergranule_size a side; this one is "
+                         f"{min(ny, nx) * px / 1e3:.1f} Mm)")
+    if supergranulation and cut == 0:
+        cut = GRANULAR_FLOW_SCALE.to_value(u.km)
 
     zg = np.linspace(z_lo, z_hi, int(nz))
     ref = reference_stratifications(tuple(zg), granulation_models, amp, element_model, b_el, umbra_model,
@@ -405,11 +426,15 @@ def _plan(shape, pixel_size, seed, nz, height_range, spot, granule_size, granula
         keep_out = np.ones((ny, nx))
 
     # kG elements in the lanes: on supergranular boundaries (network), or clustered on ~5 Mm scales.
+    cells_flow = None
     rng = stage_generator(root, "model_atmosphere", _ELEMENTS)
     fluxes = fe.power_law_fluxes(rng, flux * grid.Lx * grid.Ly * 1e10)
     signs = np.where(rng.uniform(size=fluxes.size) < pos, 1.0, -1.0)
     if network:
         lay = network_layout(grid, stage_generator(root, "model_atmosphere", _NETWORK), sg, lanes, keep_out)
+        # The cells' flow (m/s → km/s, the velocities' unit here), stopped at a sunspot as the granules' is.
+        cells_flow = (None if not supergranulation else
+                      tuple(1e-3 * v * (1 - sp["mask"]) for v in cell_flow(grid, lay["centres"])))
         bz_el = fe.render_elements(grid, rng, lay["weight"], fluxes, signs, b_el)
         bz_el += fe.render_elements(grid, rng, None, lay["fluxes"], lay["signs"], b_el, where=lay["where"])
     else:
@@ -466,8 +491,11 @@ def _plan(shape, pixel_size, seed, nz, height_range, spot, granule_size, granula
         meta["network"] = {"cells": lay["cells"], "ephemeral_regions": lay["fluxes"].size // 2}
     if cut > 0:
         meta["params"].update(flow_cutoff_km=cut)
+    if supergranulation:
+        meta["params"].update(supergranulation=True)
     # Per-row planes (indexed by the kernels' row j), then the height profiles and tables.
     return dict(grid=grid, z=zg, pixel_size=px, microturbulence=v_t, meta=meta, spectra=spectra, bases=bases,
+                supergranular=cells_flow,
                 base_field=None if canopy else bz_el,
                 blend=(a_clip, f_el, sp["umbra"], sp["penumbra"]),
                 blend_tables=(float(_A_TABLE[0]), float(_A_TABLE[1] - _A_TABLE[0]), ref["quiet_t"],

@@ -49,8 +49,9 @@ from gongsynth.sun.surface_field.network import (
     EPHEMERAL_SEPARATION,
     SupergranularNetwork,
 )
+from gongsynth.sun.surface_field.supergranulation import HORIZONTAL_RMS, VERTICAL_RMS, cell_flow_profile
 
-__all__ = ["network_layout", "cell_centres", "LANE_WIDTH_KM", "MIN_SEPARATION"]
+__all__ = ["network_layout", "cell_centres", "cell_flow", "LANE_WIDTH_KM", "MIN_SEPARATION"]
 
 #: Gaussian sigma (km) of the network lanes about the cell walls: the disk network's (1.5 Mm).
 LANE_WIDTH_KM = float(SupergranularNetwork.lane_width.to_value(u.km))
@@ -119,7 +120,8 @@ def network_layout(grid, rng, cell_size_km, lanes, keep_out, ephemeral_flux_dens
     dict
         ``weight`` (ny, nx): the network elements' placement weight;
         ``wall`` (ny, nx): distance to the nearest cell wall (km);
-        ``cells``: number of cells; ``where``, ``fluxes``, ``signs``: flat
+        ``cells``: number of cells; ``centres``: their (x, y) in km;
+        ``where``, ``fluxes``, ``signs``: flat
         pixel index, flux (Mx) and sign of each ephemeral footpoint
         (positive and negative footpoints of one region alternate).
 
@@ -165,6 +167,46 @@ def network_layout(grid, rng, cell_size_km, lanes, keep_out, ephemeral_flux_dens
         fy = np.floor(iy + 0.5 + sign * half * np.sin(angle)).astype(np.int64) % grid.ny
         fx = np.floor(ix + 0.5 + sign * half * np.cos(angle)).astype(np.int64) % grid.nx
         feet.append(fy * grid.nx + fx)
-    return dict(weight=lanes * boundary * keep_out + 1e-12, wall=wall, cells=n_cells,
+    return dict(weight=lanes * boundary * keep_out + 1e-12, wall=wall, cells=n_cells, centres=centres,
                 where=np.column_stack(feet).ravel(), fluxes=np.repeat(phi, 2),
                 signs=np.tile([1.0, -1.0], n))
+
+
+def cell_flow(grid, centres, horizontal_rms=HORIZONTAL_RMS, vertical_rms=VERTICAL_RMS):
+    """
+    The supergranular flow of the periodic cells: outflow from each centre to its walls, up in the middle.
+
+    The disk's cells' shape (`~gongsynth.sun.surface_field.supergranulation.cell_flow_profile`),
+    scaled to the rms values over the box (whose columns have equal areas).
+
+    Parameters
+    ----------
+    grid : `~gongsynth.sun.model_atmosphere.granulation.PeriodicGrid`
+    centres : `numpy.ndarray`
+        (n, 2) cell centres (x, y), km (``network_layout``'s ``centres``).
+    horizontal_rms, vertical_rms : `~astropy.units.Quantity`
+        RMS horizontal speed and vertical velocity over the box.
+
+    Returns
+    -------
+    vx, vy, vz : `numpy.ndarray`
+        (ny, nx) m/s; vz positive up.
+
+    Examples
+    --------
+    >>> from gongsynth.sun.model_atmosphere.granulation import PeriodicGrid
+    >>> g = PeriodicGrid(128, 128, 384.0)
+    >>> centres = cell_centres(g, np.random.default_rng(1), 30000.0)
+    >>> vx, vy, vz = cell_flow(g, centres)
+    >>> round(float(np.sqrt(np.mean(vx ** 2 + vy ** 2)))), round(float(vz.std())), bool(abs(vz.mean()) < 1e-9)
+    (350, 25, True)
+    """
+    wall, centre, cell = cell_walls(grid, centres)
+    y, x = grid.coords()
+    dx = (x - centres[cell, 0] + grid.Lx / 2) % grid.Lx - grid.Lx / 2
+    dy = (y - centres[cell, 1] + grid.Ly / 2) % grid.Ly - grid.Ly / 2
+    norm = np.maximum(np.hypot(dx, dy), 1e-300)
+    along, rise = cell_flow_profile(centre / np.maximum(centre + wall, 1e-300))
+    along *= horizontal_rms.to_value(u.m / u.s) / max(np.sqrt(np.mean(along ** 2)), 1e-300)
+    rise = (rise - rise.mean()) * vertical_rms.to_value(u.m / u.s) / max(rise.std(), 1e-300)
+    return along * dx / norm, along * dy / norm, rise

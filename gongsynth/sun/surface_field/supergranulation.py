@@ -33,11 +33,37 @@ from scipy.spatial import cKDTree
 
 from gongsynth.validation import check_quantity
 
-__all__ = ["supergranular_flow", "HORIZONTAL_RMS", "VERTICAL_RMS"]
+__all__ = ["supergranular_flow", "cell_flow_profile", "HORIZONTAL_RMS", "VERTICAL_RMS", "GRANULAR_FLOW_SCALE"]
 
 #: RMS horizontal and vertical supergranular velocities (Rincon & Rieutord 2018: 300-400 and 20-30 m/s).
 HORIZONTAL_RMS = 350 * u.m / u.s
 VERTICAL_RMS = 25 * u.m / u.s
+#: The largest scale a granulation keeps of its own flow where the supergranules flow too: granules
+#: and mesogranules are 1-10 Mm (Rincon & Rieutord 2018, §2.1.4); beyond, the cells' flow is the flow.
+GRANULAR_FLOW_SCALE = 10 * u.Mm
+
+
+def cell_flow_profile(s):
+    """
+    The shape of a cell's flow at s (0 at its centre, 1 on its walls): outward speed and rise, unscaled.
+
+    Parameters
+    ----------
+    s : array_like
+
+    Returns
+    -------
+    along, rise : `numpy.ndarray`
+        sin(π s) and cos(π s); a caller scales them to its rms values and takes the rise's mean out.
+
+    Examples
+    --------
+    >>> along, rise = cell_flow_profile([0.0, 0.5, 1.0])
+    >>> [round(float(v), 6) for v in along], [round(float(v), 6) for v in rise]
+    ([0.0, 1.0, 0.0], [1.0, 0.0, -1.0])
+    """
+    s = np.asarray(s, dtype=float)
+    return np.sin(np.pi * s), np.cos(np.pi * s)
 
 
 def _fibonacci_sphere(n):
@@ -119,10 +145,10 @@ def supergranular_flow(centres, points, *, horizontal_rms=HORIZONTAL_RMS, vertic
         speeds.append(float(speed))
     tree = cKDTree(centres)
     s_ref, _ = _place_in_cell(tree, centres, _fibonacci_sphere(20 * centres.shape[0]))
-    mean_rise = np.mean(np.cos(np.pi * s_ref))
-    scale_h = speeds[0] / max(np.sqrt(np.mean(np.sin(np.pi * s_ref) ** 2)), 1e-300)
-    scale_z = speeds[1] / max(np.std(np.cos(np.pi * s_ref)), 1e-300)
+    along_ref, rise_ref = cell_flow_profile(s_ref)
+    scale_h = speeds[0] / max(np.sqrt(np.mean(along_ref ** 2)), 1e-300)
+    scale_z = speeds[1] / max(np.std(rise_ref), 1e-300)
     s, away = _place_in_cell(tree, centres, points)
-    along = scale_h * np.sin(np.pi * s)
-    rise = scale_z * (np.cos(np.pi * s) - mean_rise)
+    along, rise = cell_flow_profile(s)
+    along, rise = scale_h * along, scale_z * (rise - np.mean(rise_ref))
     return u.Quantity(along[:, None] * away + rise[:, None] * points, u.m / u.s, copy=False)
