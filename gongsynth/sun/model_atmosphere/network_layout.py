@@ -176,8 +176,8 @@ def cell_flow(grid, centres, horizontal_rms=HORIZONTAL_RMS, vertical_rms=VERTICA
     """
     The supergranular flow of the periodic cells: outflow from each centre to its walls, up in the middle.
 
-    The disk's cells' shape (`~gongsynth.sun.surface_field.supergranulation.cell_flow_profile`),
-    scaled to the rms values over the box (whose columns have equal areas).
+    The disk's cells' shape and scaling (`~gongsynth.sun.surface_field.supergranulation.cell_flow_profile`),
+    its rms values over the box (whose columns have equal areas).
 
     Parameters
     ----------
@@ -206,7 +206,6 @@ def cell_flow(grid, centres, horizontal_rms=HORIZONTAL_RMS, vertical_rms=VERTICA
     dx = (x - centres[cell, 0] + grid.Lx / 2) % grid.Lx - grid.Lx / 2
     dy = (y - centres[cell, 1] + grid.Ly / 2) % grid.Ly - grid.Ly / 2
     norm = np.maximum(np.hypot(dx, dy), 1e-300)
-    along, rise = cell_flow_profile(centre / np.maximum(centre + wall, 1e-300))
-    along *= horizontal_rms.to_value(u.m / u.s) / max(np.sqrt(np.mean(along ** 2)), 1e-300)
-    rise = (rise - rise.mean()) * vertical_rms.to_value(u.m / u.s) / max(rise.std(), 1e-300)
+    s = centre / np.maximum(centre + wall, 1e-300)
+    along, rise = cell_flow_profile(s, s, horizontal_rms, vertical_rms)       # the columns: equal areas
     return along * dx / norm, along * dy / norm, rise

@@ -43,27 +43,44 @@ VERTICAL_RMS = 25 * u.m / u.s
 GRANULAR_FLOW_SCALE = 10 * u.Mm
 
 
-def cell_flow_profile(s):
+def cell_flow_profile(s, reference, horizontal_rms=HORIZONTAL_RMS, vertical_rms=VERTICAL_RMS):
     """
-    The shape of a cell's flow at s (0 at its centre, 1 on its walls): outward speed and rise, unscaled.
+    A cell's outward speed and vertical velocity at s (0 at its centre, 1 on its walls), in m/s.
+
+    The shape is sin(π s) outward and cos(π s) up, less its mean; each part is
+    scaled so that its rms over the equal-area sample ``reference`` of s
+    (the cells' whole area) is the requested one.
 
     Parameters
     ----------
-    s : array_like
+    s, reference : array_like
+        Where the flow is wanted; an equal-area sample of the cells.
+    horizontal_rms, vertical_rms : `~astropy.units.Quantity`
+        RMS outward speed and vertical velocity over ``reference`` (0 switches a part off).
 
     Returns
     -------
     along, rise : `numpy.ndarray`
-        sin(π s) and cos(π s); a caller scales them to its rms values and takes the rise's mean out.
+        m/s, outward and up.
 
     Examples
     --------
-    >>> along, rise = cell_flow_profile([0.0, 0.5, 1.0])
-    >>> [round(float(v), 6) for v in along], [round(float(v), 6) for v in rise]
-    ([0.0, 1.0, 0.0], [1.0, 0.0, -1.0])
+    >>> s = np.linspace(0, 1, 5)
+    >>> along, rise = cell_flow_profile(s, reference=np.sqrt(np.linspace(0, 1, 10001)))
+    >>> [round(float(v)) for v in along], [round(float(v)) for v in rise]
+    ([0, 350, 495, 350, 0], [61, 48, 17, -13, -26])
     """
-    s = np.asarray(s, dtype=float)
-    return np.sin(np.pi * s), np.cos(np.pi * s)
+    speeds = []
+    for name, value in (("horizontal_rms", horizontal_rms), ("vertical_rms", vertical_rms)):
+        speed = check_quantity(value, u.m / u.s, name).to_value(u.m / u.s)
+        if np.ndim(speed) or not speed >= 0:
+            raise ValueError(f"{name} must be a scalar speed >= 0, got {value}")
+        speeds.append(float(speed))
+    s, reference = np.asarray(s, dtype=float), np.asarray(reference, dtype=float)
+    along_ref, rise_ref = np.sin(np.pi * reference), np.cos(np.pi * reference)
+    scale_h = speeds[0] / max(np.sqrt(np.mean(along_ref ** 2)), 1e-300)
+    scale_z = speeds[1] / max(rise_ref.std(), 1e-300)
+    return scale_h * np.sin(np.pi * s), scale_z * (np.cos(np.pi * s) - rise_ref.mean())
 
 
 def _fibonacci_sphere(n):
@@ -137,18 +154,8 @@ def supergranular_flow(centres, points, *, horizontal_rms=HORIZONTAL_RMS, vertic
                              f"got shape {value.shape}")
     if centres.shape[0] < 2:
         raise ValueError(f"centres must hold at least two cells, got {centres.shape[0]}")
-    speeds = []
-    for name, value in (("horizontal_rms", horizontal_rms), ("vertical_rms", vertical_rms)):
-        speed = check_quantity(value, u.m / u.s, name).to_value(u.m / u.s)
-        if np.ndim(speed) or not speed >= 0:
-            raise ValueError(f"{name} must be a scalar speed >= 0, got {value}")
-        speeds.append(float(speed))
     tree = cKDTree(centres)
-    s_ref, _ = _place_in_cell(tree, centres, _fibonacci_sphere(20 * centres.shape[0]))
-    along_ref, rise_ref = cell_flow_profile(s_ref)
-    scale_h = speeds[0] / max(np.sqrt(np.mean(along_ref ** 2)), 1e-300)
-    scale_z = speeds[1] / max(np.std(rise_ref), 1e-300)
+    reference, _ = _place_in_cell(tree, centres, _fibonacci_sphere(20 * centres.shape[0]))
     s, away = _place_in_cell(tree, centres, points)
-    along, rise = cell_flow_profile(s)
-    along, rise = scale_h * along, scale_z * (rise - np.mean(rise_ref))
+    along, rise = cell_flow_profile(s, reference, horizontal_rms, vertical_rms)
     return u.Quantity(along[:, None] * away + rise[:, None] * points, u.m / u.s, copy=False)
