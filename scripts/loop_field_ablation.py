@@ -16,6 +16,11 @@ the real one (`gongsynth.analysis.map_statistics.compare_statistics`)::
 
     python scripts/loop_field_ablation.py --cache runs --seeds 1 2
 
+``--horizontal`` and ``--patch`` set another amplitude and patch size, e.g. the
+MURaM snapshot's at 200 km (``--horizontal 31.3 --patch 0.45``: its rms per
+component × √2 and the side of its equivalent white area,
+``scripts/horizontal_field_muram.py``).
+
 Seconds (the runs are cached).
 """
 import argparse
@@ -31,11 +36,11 @@ BIG_BEAR = REAL / "gong" / "bbbqa090905t1854.fits.gz"
 HORIZONTAL_G, PATCH_ARCSEC, RESOLUTION_ARCSEC = 55.0, 1.0, 5.0
 
 
-def loop_signal(shape, rho, pixel_arcsec, rng):
+def loop_signal(shape, rho, pixel_arcsec, rng, horizontal=HORIZONTAL_G, patch=PATCH_ARCSEC):
     """The line-of-sight signal (G) of the loop field on a map's pixels (ρ in solar radii)."""
     from scipy.ndimage import gaussian_filter
 
-    per_pixel = HORIZONTAL_G / np.sqrt(2) * PATCH_ARCSEC / pixel_arcsec
+    per_pixel = horizontal / np.sqrt(2) * patch / pixel_arcsec
     sigma = RESOLUTION_ARCSEC / 2.355 / pixel_arcsec
     smoothed = gaussian_filter(rng.standard_normal(shape) * per_pixel, sigma)
     return smoothed * np.clip(rho, 0, 1)          # sin θ = ρ on the disk
@@ -46,6 +51,10 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
     parser.add_argument("--cache", type=Path, required=True, help="network_clusters_vs_real.py's cache")
     parser.add_argument("--seeds", type=int, nargs="+", default=[1, 2])
+    parser.add_argument("--horizontal", type=float, default=HORIZONTAL_G,
+                        help="rms |B_h| (G) of the patches (default: Lites et al.'s 55 G)")
+    parser.add_argument("--patch", type=float, default=PATCH_ARCSEC,
+                        help="side (arcsec) of the independent patches (default 1)")
     args = parser.parse_args(argv)
 
     import astropy.units as u
@@ -60,7 +69,7 @@ def main(argv=None):
         sim = sunpy.map.Map(args.cache / f"gong_seed{seed}.fits")
         rho = np.asarray(disk_coordinates(sim)[0])
         added = loop_signal(sim.data.shape, rho, sim.scale[0].to_value(u.arcsec / u.pix),
-                            np.random.default_rng(100 + seed))
+                            np.random.default_rng(100 + seed), args.horizontal, args.patch)
         ring = np.isfinite(sim.data) & (rho > 0.6) & (rho < 0.8)
         print(f"seed {seed}: loop field's line-of-sight rms at 0.6-0.8 R = {added[ring].std():.2f} G")
         with_loops = sunpy.map.Map(np.where(np.isfinite(sim.data), sim.data + added, np.nan), sim.meta)
