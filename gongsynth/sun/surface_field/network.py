@@ -28,7 +28,10 @@ instruments, never fitted to one map):
   quiet Sun: the whole Sun's unsigned flux near cycle minimum, ≈ 2.5-3e23
   Mx in full-disk magnetograms of 1-2″ pixels (Schrijver & Harvey 1994,
   Sol. Phys. 150, 1; as recalled, not checked against the paper this
-  session), over its 6.1e22 cm².
+  session), over its 6.1e22 cm².  Budgets at MDI's and HMI's resolution
+  are lower (abstracts: Jin et al. 2011, arXiv:1102.3485, quiet regions
+  0.94e23 Mx at the cycle 23/24 minimum; Jin & Wang 2019, RAA 19, 69,
+  network 39 % of 5.9e22 Mx): the noise guide's "amount" of the network.
 - **Element fluxes**: network concentrations with N(Φ) ∝ Φ^-1.85 (Parnell
   et al. 2009, ApJ 698, 75: one power law from 2e17 to 1e23 Mx), here from
   1e18 Mx (below, GONG sees the internetwork of the patches) to 1e20 Mx
