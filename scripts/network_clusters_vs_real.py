@@ -123,7 +123,8 @@ def main(argv=None):
                          "number_per_1e4_Mm2": s["number_density"].to_value(u.Mm**-2) * 1e4,
                          "flux_density": s["flux_density"], "p50": s["p50"], "p90": s["p90"], "p99": s["p99"],
                          "above_3e19": s["above_index_flux"], "above_1e20": s["above_1e20"],
-                         "index": s["index"], "index_error": s["index_error"]})
+                         "index": s["index"], "index_error": s["index_error"],
+                         "elongation": s["elongation"], "shaped": s["shaped"]})
     table = QTable(rows=rows)
     table.meta["description"] = ("network clusters (connected pixels of one sign beyond the threshold, quiet "
                                  "pixels within 0.35 Rsun) of real and simulated maps at GONG resolution; "
@@ -132,7 +133,7 @@ def main(argv=None):
     args.table.parent.mkdir(parents=True, exist_ok=True)
     table.write(args.table, overwrite=True)
     for col in ("region_area", "flux_density", "p50", "p90", "p99", "number_per_1e4_Mm2", "index",
-                "index_error"):
+                "index_error", "elongation"):
         table[col].info.format = ".3g"
     table.pprint(max_lines=-1, max_width=-1)
     return table

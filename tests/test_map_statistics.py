@@ -180,6 +180,7 @@ def test_cluster_columns_are_network_clusters_of_each_map():
         assert t["cluster_density"][row] == expected["number_density"]
         assert t["cluster_flux_density"][row] == expected["flux_density"]
         assert t["cluster_p99"][row] == expected["p99"]
+        np.testing.assert_equal(t["cluster_elongation"][row], expected["elongation"])
     assert t["cluster_flux_density"][0] > t["cluster_flux_density"][1] > 0 * u.G
     ref = SkyCoord(600 * u.arcsec, 600 * u.arcsec, frame=frames.Helioprojective, observer="earth",
                    obstime="2020-06-01T12:00")
@@ -187,3 +188,4 @@ def test_cluster_columns_are_network_clusters_of_each_map():
     off = [sunpy.map.Map(d[:100, :100], header) for d in data]
     t_off = compare_statistics(*off).table
     assert np.all(np.isnan(t_off["cluster_density"].value)) and np.all(np.isnan(t_off["cluster_index"]))
+    assert np.all(np.isnan(t_off["cluster_elongation"]))

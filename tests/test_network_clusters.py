@@ -56,6 +56,38 @@ def test_fluxes_signs_and_connectivity():
                                t["flux"].sum().to_value(u.Mx) / (found.region_area.to_value(u.Mm**2) * 1e16))
 
 
+def test_elongation_of_lines_squares_and_single_pixels():
+    # Pixels count as uniform squares: a row of n equal pixels has second moments n²/12 along it and
+    # 1/12 across, so its elongation is exactly n; a square cluster's and one pixel's are 1.
+    data = np.zeros((121, 121))
+    data[50, 40:47] = 60.0              # a row of 7 pixels
+    data[70:75, 60] = -60.0             # a column of 5
+    data[60:63, 75:78] = 60.0           # a 3 × 3 square
+    data[45, 70] = 60.0                 # one pixel
+    data[80, 50] = data[80, 52] = 40.0  # two single pixels (not 8-connected): two clusters
+    found = network_clusters(centre_map(data), max_radius=0.15)
+    by_pixels = {int(n): float(e) for n, e in zip(found.table["pixels"], found.table["elongation"])}
+    assert by_pixels[7] == pytest.approx(7.0, rel=1e-9)
+    assert by_pixels[5] == pytest.approx(5.0, rel=1e-9)
+    assert by_pixels[9] == pytest.approx(1.0, rel=1e-9)
+    assert by_pixels[1] == pytest.approx(1.0, rel=1e-9)
+    # The summary's median is over the clusters of at least SHAPE_PIXELS (6) pixels: the row and the square.
+    summary = found.summary()
+    assert summary["shaped"] == 2
+    assert summary["elongation"] == pytest.approx(4.0, rel=1e-9)
+
+
+def test_elongation_weighs_by_field():
+    # A row of 3 whose ends are weak is rounder than one of equal pixels: the weights are |B|.
+    data = np.zeros((121, 121))
+    data[50, 40:43] = [30.0, 90.0, 30.0]
+    found = network_clusters(centre_map(data), max_radius=0.15)
+    # Variance along the row: 2 × 30 / 150 = 0.4 pixel², plus 1/12 for the pixels' own extent.
+    expected = np.sqrt((0.4 + 1 / 12) / (1 / 12))
+    assert float(found.table["elongation"][0]) == pytest.approx(expected, rel=1e-9)
+    assert np.isnan(found.summary()["elongation"])      # no cluster of 6 pixels
+
+
 def test_median_is_removed_and_region_is_a_disk():
     data = np.full((121, 121), -3.0)    # a zero point: not a cluster at any threshold above it
     data[60, 60] = 30.0                 # 33 G above the median

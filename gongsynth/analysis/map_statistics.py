@@ -147,8 +147,9 @@ class StatisticsComparison:
         same condition (as they are, and medians removed); the network's
         clusters within 0.35 R☉ (`~gongsynth.analysis.network_clusters.network_clusters`):
         ``cluster_density`` (per Mm²), ``cluster_flux_density`` (G),
-        ``cluster_p99`` (Mx) and ``cluster_index`` (NaN where the map does
-        not reach disk centre).
+        ``cluster_p99`` (Mx), ``cluster_index`` and ``cluster_elongation``
+        (the median axis ratio of clusters of at least 6 pixels; all NaN
+        where the map does not reach disk centre).
     rings : `~astropy.table.QTable`
         ``r_inner``, ``r_outer`` (solar radii), ``pixels_sim``, ``pixels_obs``
         and the mean |B| of each map and condition: ``sim``, ``obs``,
@@ -246,7 +247,8 @@ class StatisticsComparison:
         for key, name, scale in (("cluster_density", "clusters per 1e4 Mm2", 1e4),
                                  ("cluster_flux_density", "cluster flux / area [G]", 1.0),
                                  ("cluster_p99", "clusters' 99% [1e19 Mx]", 1e-19),
-                                 ("cluster_index", "cluster index > 3e19 Mx", 1.0)):
+                                 ("cluster_index", "cluster index > 3e19 Mx", 1.0),
+                                 ("cluster_elongation", "cluster elongation", 1.0)):
             v = np.asarray(getattr(t[key], "value", t[key]), dtype=float) * scale
             with np.errstate(invalid="ignore", divide="ignore"):
                 lines.append(f"{name:26s}{v[0]:9.2f}{v[1]:9.2f}{v[0] / v[1]:8.2f}   "
@@ -338,11 +340,12 @@ def _measure(smap, rho, max_radius, box, ring_edges, edges=None):
         clusters = network_clusters(smap).summary()
     except ValueError:                       # the map does not reach disk centre
         clusters = {"number_density": np.nan / u.Mm**2, "flux_density": np.nan * u.G,
-                    "p99": np.nan * u.Mx, "index": np.nan}
+                    "p99": np.nan * u.Mx, "index": np.nan, "elongation": np.nan}
     return dict(
         clusters={"cluster_density": clusters["number_density"].to(u.Mm**-2),
                   "cluster_flux_density": clusters["flux_density"].to(u.G),
-                  "cluster_p99": clusters["p99"].to(u.Mx), "cluster_index": float(clusters["index"])},
+                  "cluster_p99": clusters["p99"].to(u.Mx), "cluster_index": float(clusters["index"]),
+                  "cluster_elongation": float(clusters["elongation"])},
         values=values,
         numbers={"noise_box": noise.sigma.to_value(u.G), "noise_difference": noise.difference.to_value(u.G),
                  "mean": float(np.mean(values)), "median": float(np.median(values)),
