@@ -83,6 +83,52 @@ def test_large_concentrations_spread_no_denser_than_plage():
     assert np.sum(np.abs(spread) * area) == pytest.approx(np.sum(np.abs(point) * area), rel=1e-6)
 
 
+def _blob_elongations(field, lon, lat):
+    """Axis ratio of each connected blob's |flux|-weighted second moments on the local tangent plane."""
+    from scipy import ndimage
+
+    labels, n = ndimage.label(field != 0, structure=np.ones((3, 3), dtype=bool))
+    y, x = np.meshgrid(lat, lon, indexing="ij")
+    x = x * np.cos(np.radians(lat))[:, None]            # degrees of great circle
+    ratios = []
+    for k in range(1, n + 1):
+        w = np.abs(field[labels == k])
+        if w.size < 2:
+            ratios.append(1.0)
+            continue
+        cov = np.cov(np.vstack([x[labels == k], y[labels == k]]), aweights=w)
+        small, large = np.linalg.eigvalsh(cov)
+        ratios.append(np.sqrt(large / max(small, 1e-12)))
+    return np.array(ratios)
+
+
+def test_chains_lay_each_concentration_along_its_wall():
+    """chain_length spreads every concentration along its cell wall, keeping its flux; 0 is the old point."""
+    from gongsynth.sun.surface_field.network import _wall_tangents
+
+    lon = lat = np.linspace(-6, 6, 121)                    # 0.1° cells of ~1.2 Mm
+    kwargs = dict(seed=4, flux_density=3 * u.G, flux_range=(5e19, 1e20) * u.Mx,
+                  ephemeral_flux_density=0 * u.G, cluster_flux_density=None)
+    zero = np.zeros((lat.size, lon.size))
+    point = SupergranularNetwork(**kwargs).on_grid(lon, lat, zero)
+    chain = SupergranularNetwork(chain_length=3 * u.Mm, **kwargs).on_grid(lon, lat, zero)
+    area = np.cos(np.radians(lat))[:, None] * np.ones(lon.size)
+    inner = (np.abs(lat)[:, None] < 4) & (np.abs(lon)[None, :] < 4)   # away from the region's edge
+    assert np.count_nonzero(point[inner]) >= 3                       # a few isolated concentrations
+    # The flux of each stays its own: the region's signed and unsigned totals are kept.
+    assert np.sum(chain * area) == pytest.approx(np.sum(point * area), rel=1e-9)
+    assert np.sum(np.abs(chain) * area) == pytest.approx(np.sum(np.abs(point) * area), rel=1e-6)
+    # A point across and a Gaussian of 3 Mm (2.5 cells) along: long, thin blobs.
+    assert np.all(_blob_elongations(point, lon, lat) == 1.0)
+    assert np.median(_blob_elongations(chain, lon, lat)) > 3
+    # The wall between two cells east and west of a point on the equator runs north-south.
+    here = np.array([[1.0, 0.0, 0.0]])
+    west, east = np.array([[1.0, -0.01, 0.0]]), np.array([[1.0, 0.01, 0.0]])
+    np.testing.assert_allclose(np.abs(_wall_tangents(here, west, east)), [[0.0, 1.0]], atol=1e-12)
+    with pytest.raises(ValueError, match="chain_length"):
+        SupergranularNetwork(chain_length=-1 * u.Mm)
+
+
 def test_bad_parameters():
     with pytest.raises(ValueError, match="flux_range"):
         SupergranularNetwork(flux_range=(1e19, 1e18) * u.Mx)
