@@ -44,6 +44,7 @@ def main(argv=None):
     from astropy.table import QTable
 
     import gongsynth
+    import gongsynth.config  # noqa: F401  (the modules that read the class at import, before it is patched)
     from gongsynth.analysis.degrade import degrade_if_finer
     from gongsynth.analysis.network_clusters import network_clusters
     from gongsynth.sun.surface_field import network
