@@ -18,13 +18,12 @@ weak field and takes out the network clusters' peaks::
 
 Seconds once the runs are cached (the runs of ``scripts/network_clusters_vs_real.py``).
 """
-import argparse
 import sys
 import warnings
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from network_clusters_vs_real import real_and_simulated_maps  # noqa: E402  (the same runs and cache)
+from network_clusters_vs_real import real_and_simulated_maps, runs_parser  # noqa: E402  (the same runs)
 
 #: Side of each box (arcsec), where the off-centre boxes sit (solar radii), and the clip (G).
 BOX_ARCSEC, LIMB_RADIUS, CLIP_G = 240.0, 0.7, 15.0
@@ -51,11 +50,7 @@ def band_powers(smap, offsets, clip):
 
 def main(argv=None):
     """Measure the bands on every map, write the table and print the real/simulated ratios."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
-    parser.add_argument("--cache", type=Path, default=Path("network_clusters_runs"),
-                        help="folder of the simulated maps (made if missing; network_clusters_vs_real.py's)")
-    parser.add_argument("--seeds", type=int, nargs="+", default=[1, 2])
-    parser.add_argument("--table", type=Path, required=True, help="ECSV file to write")
+    parser = runs_parser(__doc__)
     args = parser.parse_args(argv)
 
     import astropy.units as u

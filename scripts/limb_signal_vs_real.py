@@ -22,22 +22,17 @@ Writes an ECSV table (one row per map, kind and ring)::
 Takes about 1-2 minutes on two cores.  The runs are those of
 ``scripts/network_clusters_vs_real.py`` (its ``simulated``, the same cache).
 """
-import argparse
 import sys
 import warnings
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from network_clusters_vs_real import real_and_simulated_maps  # noqa: E402  (the same runs and cache)
+from network_clusters_vs_real import real_and_simulated_maps, runs_parser  # noqa: E402  (the same runs)
 
 
 def main(argv=None):
     """Measure the rings of the real and simulated maps, write the table."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
-    parser.add_argument("--cache", type=Path, default=Path("network_clusters_runs"),
-                        help="folder of the simulated maps (made if missing; network_clusters_vs_real.py's)")
-    parser.add_argument("--seeds", type=int, nargs="+", default=[1, 2])
-    parser.add_argument("--table", type=Path, required=True, help="ECSV file to write")
+    parser = runs_parser(__doc__)
     args = parser.parse_args(argv)
 
     import astropy.units as u

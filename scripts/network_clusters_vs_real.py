@@ -93,14 +93,25 @@ def real_and_simulated_maps(seeds, cache, instruments=tuple(REAL_MAPS), truth=Fa
     return maps
 
 
+def runs_parser(doc, seeds=(1, 2)):
+    """
+    The command line of a script that measures these runs: ``--cache``, ``--seeds`` and ``--table``.
+
+    Also used by ``scripts/limb_signal_vs_real.py``, ``scripts/limb_signal_scales.py`` and
+    ``scripts/power_spectrum_seeds.py``.
+    """
+    parser = argparse.ArgumentParser(description=doc.splitlines()[1])
+    parser.add_argument("--cache", type=Path, default=Path("network_clusters_runs"),
+                        help="folder of the simulated maps (made if missing; network_clusters_vs_real.py's)")
+    parser.add_argument("--seeds", type=int, nargs="+", default=list(seeds))
+    parser.add_argument("--table", type=Path, required=True, help="ECSV file to write")
+    return parser
+
+
 def main(argv=None):
     """Measure the real and simulated maps, write the table."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
-    parser.add_argument("--cache", type=Path, default=Path("network_clusters_runs"),
-                        help="folder of the simulated magnetograms (made if missing)")
-    parser.add_argument("--seeds", type=int, nargs="+", default=[1, 2])
+    parser = runs_parser(__doc__)
     parser.add_argument("--thresholds", type=float, nargs="+", default=[20.0, 40.0], help="G")
-    parser.add_argument("--table", type=Path, required=True, help="ECSV file to write")
     args = parser.parse_args(argv)
 
     import astropy.units as u

@@ -28,23 +28,18 @@ Writes an ECSV table (the null test in its ``meta``)::
 
 About 1 minute per seed on two cores (the runs are cached).
 """
-import argparse
 import itertools
 import sys
 import warnings
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from network_clusters_vs_real import real_and_simulated_maps  # noqa: E402  (the same runs and cache)
+from network_clusters_vs_real import real_and_simulated_maps, runs_parser  # noqa: E402  (the same runs)
 
 
 def main(argv=None):
     """Measure the spectra, write the table."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
-    parser.add_argument("--cache", type=Path, default=Path("network_clusters_runs"),
-                        help="folder of the simulated maps (made if missing; network_clusters_vs_real.py's)")
-    parser.add_argument("--seeds", type=int, nargs="+", default=[1, 2, 3, 4])
-    parser.add_argument("--table", type=Path, required=True, help="ECSV file to write")
+    parser = runs_parser(__doc__, seeds=(1, 2, 3, 4))
     args = parser.parse_args(argv)
     if len(args.seeds) < 2:
         parser.error("--seeds needs at least two seeds (the spread and the null test compare them)")
