@@ -445,7 +445,8 @@ def _network(config):
     if not config.network_on:
         return None
     from gongsynth.sun.surface_field.network import SupergranularNetwork
-    return SupergranularNetwork(seed=child_sequence(config.seed, "network"))
+    return SupergranularNetwork(seed=child_sequence(config.seed, "network"),
+                                chain_length=config.network_chain_length)
 
 
 #: The radiative transfer's default line (its line registry's key).
@@ -566,6 +567,8 @@ def run_header(config):
     }
     if config.mode == "tiled":  # a full-disk scene has no single field-centre latitude
         cards = {"simlat": (config.latitude.to_value(u.deg), "[deg] field-centre latitude"), **cards}
+    elif config.network_on and config.network_chain_length.value > 0:   # only then: default headers stay
+        cards["netchain"] = (config.network_chain_length.to_value(u.Mm), "[Mm] network chain sigma")
     return cards
 
 

@@ -6,7 +6,8 @@ ratio 1.33-1.45 on the real GONG, MDI and HMI maps of
 ``scripts/network_clusters_vs_real.py``), the model's with concentrations at
 points 1.25-1.27.  `~gongsynth.sun.surface_field.network.SupergranularNetwork`
 can lay each concentration along its cell wall (``chain_length``, the
-Gaussian sigma along the wall; 0 by default).  This script runs the three
+Gaussian sigma along the wall; a run's ``network_chain_length``, 0 by
+default).  This script runs the three
 instruments' full disks of their real maps' dates (seed 1, the runs of
 ``network_clusters_vs_real.py``) for each chain length, measures the
 clusters at GONG's resolution (`gongsynth.analysis.network_clusters`) and
@@ -37,39 +38,32 @@ def main(argv=None):
     parser.add_argument("--table", type=Path, required=True, help="ECSV file to write")
     args = parser.parse_args(argv)
 
-    import functools
-    from unittest import mock
-
     import astropy.units as u
     from astropy.table import QTable
 
     import gongsynth
-    import gongsynth.config  # noqa: F401  (the modules that read the class at import, before it is patched)
     from gongsynth.analysis.degrade import degrade_if_finer
     from gongsynth.analysis.network_clusters import network_clusters
-    from gongsynth.sun.surface_field import network
 
     warnings.simplefilter("ignore", category=UserWarning)
     real = {name: network_clusters(degrade_if_finer(gongsynth.load_observation(path))[0]).summary()
             for name, (_, path) in REAL_MAPS.items()}
     rows = []
     for length in args.lengths:
-        # The run makes its network in gongsynth.chain (SupergranularNetwork(seed=...)): give it the length.
-        laid = functools.partial(network.SupergranularNetwork, chain_length=length * u.Mm)
-        with mock.patch.object(network, "SupergranularNetwork", laid):
-            for name in REAL_MAPS:
-                smap = simulated(name, args.seed, args.cache / f"chain{length:g}")["magnetogram"]
-                s, r = network_clusters(degrade_if_finer(smap)[0]).summary(), real[name]
-                rows.append({"instrument": name, "chain_length": length * u.Mm, "seed": args.seed,
-                             "elongation": s["elongation"], "real_elongation": r["elongation"],
-                             "shaped": s["shaped"], "real_shaped": r["shaped"],
-                             "number_ratio": float(s["number_density"] / r["number_density"]),
-                             "flux_density_ratio": float(s["flux_density"] / r["flux_density"]),
-                             "p99_ratio": float(s["p99"] / r["p99"])})
-                row = rows[-1]
-                print(f"{length:4g} Mm {name}: elongation {s['elongation']:.3f} (real {r['elongation']:.3f}) "
-                      f", number {row['number_ratio']:.2f}, flux {row['flux_density_ratio']:.2f}, "
-                      f"99 % {row['p99_ratio']:.2f} of the real", flush=True)
+        for name in REAL_MAPS:
+            smap = simulated(name, args.seed, args.cache / f"chain{length:g}",
+                             chain_length=length * u.Mm)["magnetogram"]
+            s, r = network_clusters(degrade_if_finer(smap)[0]).summary(), real[name]
+            rows.append({"instrument": name, "chain_length": length * u.Mm, "seed": args.seed,
+                         "elongation": s["elongation"], "real_elongation": r["elongation"],
+                         "shaped": s["shaped"], "real_shaped": r["shaped"],
+                         "number_ratio": float(s["number_density"] / r["number_density"]),
+                         "flux_density_ratio": float(s["flux_density"] / r["flux_density"]),
+                         "p99_ratio": float(s["p99"] / r["p99"])})
+            row = rows[-1]
+            print(f"{length:4g} Mm {name}: elongation {s['elongation']:.3f} (real {r['elongation']:.3f}), "
+                  f"number {row['number_ratio']:.2f}, flux {row['flux_density_ratio']:.2f}, "
+                  f"99 % {row['p99_ratio']:.2f} of the real", flush=True)
     table = QTable(rows=rows)
     table.meta["description"] = ("network clusters' median elongation (and number, flux per area, 99th "
                                  "percentile over the real map's) against the network's chain length; "

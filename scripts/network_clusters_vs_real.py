@@ -37,9 +37,11 @@ REAL_MAPS = {
 }
 
 
-def simulated(instrument, seed, cache):
+def simulated(instrument, seed, cache, chain_length=None):
     """
     The run of ``instrument``'s real map: its magnetogram and truth ⊗ PSF (run and saved first if missing).
+
+    ``chain_length`` (a length) sets the run's ``network_chain_length`` (default: the configuration's).
 
     Also used by ``scripts/limb_signal_vs_real.py`` and ``scripts/power_spectrum_seeds.py`` (the same
     runs, the same cache).
@@ -65,6 +67,8 @@ def simulated(instrument, seed, cache):
             duration = 5 * u.min if instrument == "mdi" else 0.75 * u.min
             config = SimulationConfig(instrument=instrument, mode="full-disk", duration=duration, seed=seed,
                                       obstime=date, surface_field="synthetic")
+        if chain_length is not None:
+            config = config.replace(network_chain_length=chain_length)
         Path(cache).mkdir(parents=True, exist_ok=True)
         result = gongsynth.simulate(config=config, progress=False)
         for kind, path in paths.items():

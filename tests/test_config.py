@@ -128,3 +128,19 @@ def test_knobs_belong_to_the_chosen_sun():
     # The 3-D Sun over the full disk: its knobs are the builder's, its grid the run's default for it.
     disk = SimulationConfig(sun="model-atmosphere", mode="full-disk", photosphere={"nz": 40})
     assert disk.sun_arguments()["nz"] == 40 and SimulationConfig.from_toml(disk.to_toml()) == disk
+
+
+def test_network_chain_length_reaches_the_network_and_the_header():
+    from gongsynth.chain import _network, run_header
+
+    chained = SimulationConfig(mode="full-disk", network_chain_length=4 * u.Mm)
+    assert SimulationConfig.from_toml(chained.to_toml()).network_chain_length == 4 * u.Mm
+    assert _network(chained).chain_length == 4 * u.Mm
+    assert run_header(chained)["netchain"][0] == pytest.approx(4.0)
+    default = SimulationConfig(mode="full-disk")
+    assert _network(default).chain_length == 0 * u.Mm
+    assert "netchain" not in run_header(default)          # the default products' headers stay as they were
+    with pytest.raises(ValueError, match="network_chain_length"):
+        SimulationConfig(mode="full-disk", network_chain_length=-1 * u.Mm)
+    with pytest.raises(u.UnitsError, match="network_chain_length"):
+        SimulationConfig(mode="full-disk", network_chain_length=3 * u.s)
