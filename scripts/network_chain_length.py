@@ -8,8 +8,8 @@ points 1.25-1.27.  `~gongsynth.sun.surface_field.network.SupergranularNetwork`
 can lay each concentration along its cell wall (``chain_length``, the
 Gaussian sigma along the wall; a run's ``network_chain_length``, 0 by
 default).  This script runs the three
-instruments' full disks of their real maps' dates (seed 1, the runs of
-``network_clusters_vs_real.py``) for each chain length, measures the
+instruments' full disks of their real maps' dates (seeds 1 and 2, the runs
+of ``network_clusters_vs_real.py``) for each chain length, measures the
 clusters at GONG's resolution (`gongsynth.analysis.network_clusters`) and
 writes, per instrument and length, the median elongation beside the real
 map's, and the clusters' number, flux per area and 99th percentile over the
@@ -18,9 +18,10 @@ real map's::
     python scripts/network_chain_length.py --cache runs --lengths 0 2 3 4 5 \
         --table docs/guide/network_chain_length.ecsv
 
-About 1-2 minutes per length on two cores once the 3-D library is cached.
+About 1-2 minutes per length and seed on two cores once the 3-D library is cached.
 """
 import argparse
+import itertools
 import sys
 import warnings
 from pathlib import Path
@@ -34,7 +35,7 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
     parser.add_argument("--cache", type=Path, required=True, help="folder for the runs (one per length)")
     parser.add_argument("--lengths", type=float, nargs="+", default=[0, 2, 3, 4, 5], help="Mm")
-    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--seeds", type=int, nargs="+", default=[1, 2])
     parser.add_argument("--table", type=Path, required=True, help="ECSV file to write")
     args = parser.parse_args(argv)
 
@@ -49,21 +50,20 @@ def main(argv=None):
     real = {name: network_clusters(degrade_if_finer(gongsynth.load_observation(path))[0]).summary()
             for name, (_, path) in REAL_MAPS.items()}
     rows = []
-    for length in args.lengths:
-        for name in REAL_MAPS:
-            smap = simulated(name, args.seed, args.cache / f"chain{length:g}",
-                             chain_length=length * u.Mm)["magnetogram"]
-            s, r = network_clusters(degrade_if_finer(smap)[0]).summary(), real[name]
-            rows.append({"instrument": name, "chain_length": length * u.Mm, "seed": args.seed,
-                         "elongation": s["elongation"], "real_elongation": r["elongation"],
-                         "shaped": s["shaped"], "real_shaped": r["shaped"],
-                         "number_ratio": float(s["number_density"] / r["number_density"]),
-                         "flux_density_ratio": float(s["flux_density"] / r["flux_density"]),
-                         "p99_ratio": float(s["p99"] / r["p99"])})
-            row = rows[-1]
-            print(f"{length:4g} Mm {name}: elongation {s['elongation']:.3f} (real {r['elongation']:.3f}), "
-                  f"number {row['number_ratio']:.2f}, flux {row['flux_density_ratio']:.2f}, "
-                  f"99 % {row['p99_ratio']:.2f} of the real", flush=True)
+    for length, seed, name in itertools.product(args.lengths, args.seeds, REAL_MAPS):
+        smap = simulated(name, seed, args.cache / f"chain{length:g}",
+                         chain_length=length * u.Mm)["magnetogram"]
+        s, r = network_clusters(degrade_if_finer(smap)[0]).summary(), real[name]
+        rows.append({"instrument": name, "chain_length": length * u.Mm, "seed": seed,
+                     "elongation": s["elongation"], "real_elongation": r["elongation"],
+                     "shaped": s["shaped"], "real_shaped": r["shaped"],
+                     "number_ratio": float(s["number_density"] / r["number_density"]),
+                     "flux_density_ratio": float(s["flux_density"] / r["flux_density"]),
+                     "p99_ratio": float(s["p99"] / r["p99"])})
+        row = rows[-1]
+        print(f"{length:4g} Mm, seed {seed}, {name}: elongation {s['elongation']:.3f} "
+              f"(real {r['elongation']:.3f}), number {row['number_ratio']:.2f}, "
+              f"flux {row['flux_density_ratio']:.2f}, 99 % {row['p99_ratio']:.2f} of the real", flush=True)
     table = QTable(rows=rows)
     table.meta["description"] = ("network clusters' median elongation (and number, flux per area, 99th "
                                  "percentile over the real map's) against the network's chain length; "
