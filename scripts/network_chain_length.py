@@ -8,14 +8,14 @@ points 1.25-1.27.  `~gongsynth.sun.surface_field.network.SupergranularNetwork`
 can lay each concentration along its cell wall (``chain_length``, the
 Gaussian sigma along the wall; a run's ``network_chain_length``, 0 by
 default).  This script runs the three
-instruments' full disks of their real maps' dates (seeds 1 and 2, the runs
-of ``network_clusters_vs_real.py``) for each chain length, measures the
+instruments' full disks of their real maps' dates (the runs of
+``network_clusters_vs_real.py``; the shipped table: seeds 1-4) for each chain length, measures the
 clusters at GONG's resolution (`gongsynth.analysis.network_clusters`) and
 writes, per instrument and length, the median elongation beside the real
 map's, and the clusters' number, flux per area and 99th percentile over the
 real map's::
 
-    python scripts/network_chain_length.py --cache runs --lengths 0 2 3 4 5 \
+    python scripts/network_chain_length.py --cache runs --lengths 0 2 3 4 5 --seeds 1 2 3 4 \
         --table docs/guide/network_chain_length.ecsv
 
 About 1-2 minutes per length and seed on two cores once the 3-D library is cached.
