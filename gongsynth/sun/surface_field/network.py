@@ -322,11 +322,10 @@ class SupergranularNetwork:
         if self.cluster_flux_density is None and tangent is None:
             return np.bincount(at, weights=flux, minlength=area.size).astype(float)
         densest = math.inf if self.cluster_flux_density is None else self.cluster_flux_density.to_value(u.G)
-        dense = np.abs(flux) > densest * area[at]
-        if tangent is not None:
-            dense = np.ones(flux.size, dtype=bool)          # every concentration spreads along its wall
-        out = np.bincount(at[~dense], weights=flux[~dense], minlength=area.size).astype(float)
-        if not dense.any():
+        plage = np.abs(flux) > densest * area[at]               # denser than plage in one cell: spread
+        spread = plage if tangent is None else np.ones(flux.size, dtype=bool)   # chains: every one
+        out = np.bincount(at[~spread], weights=flux[~spread], minlength=area.size).astype(float)
+        if not spread.any():
             return out
         chain = self.chain_length.to_value(u.km)
         rows, cols = np.nonzero(inside)
@@ -336,13 +335,13 @@ class SupergranularNetwork:
         step_lat = abs(lat[1] - lat[0]) * r_km if lat.size > 1 else math.inf
         step_lon = abs(lon[1] - lon[0]) * r_km if lon.size > 1 else math.inf
         targets, weights = [], []
-        for n, (k, phi) in enumerate(zip(at[dense], flux[dense])):
+        for n in np.flatnonzero(spread):
+            k, phi = at[n], flux[n]
             i0, j0 = rows[k], cols[k]
             # A point across its wall: a sigma a quarter of the grid's, so that the cells its line crosses
             # take the flux (unless the plage limit spreads it wider).
             floor = 0.0 if tangent is None else 0.25 * min(step_lat, step_lon * math.cos(lat[i0]))
-            sigma = max(math.sqrt(abs(phi) / (2 * math.pi * densest)) / 1e5 if abs(phi) > densest * area[k]
-                        else 0.0, floor)                                           # km
+            sigma = max(math.sqrt(abs(phi) / (2 * math.pi * densest)) / 1e5 if plage[n] else 0.0, floor)  # km
             along = math.hypot(sigma, chain) if tangent is not None else sigma
             dx_step = max(step_lon * math.cos(lat[i0]), 1e-9)
             ki = min(int(math.ceil(3 * along / step_lat)), lat.size)
