@@ -567,7 +567,7 @@ def run_header(config):
     }
     if config.mode == "tiled":  # a full-disk scene has no single field-centre latitude
         cards = {"simlat": (config.latitude.to_value(u.deg), "[deg] field-centre latitude"), **cards}
-    elif config.network_on and config.network_chain_length.value > 0:   # only then: default headers stay
+    elif config.network_on:
         cards["netchain"] = (config.network_chain_length.to_value(u.Mm), "[Mm] network chain sigma")
     return cards
 

@@ -27,6 +27,7 @@ from gongsynth.geometry import Pointing
 from gongsynth.observing import GONG_SITES, as_observed, check_site, like_gong
 from gongsynth.seeding import root_seed
 from gongsynth.stages.camera.integrate import ENGINES
+from gongsynth.sun.surface_field.network import CHAIN_LENGTH
 from gongsynth.suns import DEFAULT_SUNS, SUNS, default_sun, photosphere_defaults, run_grid_default
 from gongsynth.tomlfmt import toml_table
 
@@ -54,7 +55,7 @@ _QUANTITIES = {
                            "[0, 0]: the Sun's centre"),
     "network_chain_length": (u.Mm, "full-disk mode, with the network: Gaussian sigma along its cell wall "
                                    "over which each concentration is laid (0: at a point; 3-4 Mm matches "
-                                   "real GONG, MDI and HMI maps, not yet the default)"),
+                                   "real GONG, MDI and HMI maps)"),
 }
 _DOCS = {
     "engine": "camera engine: 'blocks' (fast, statistically exact) or 'frames' (frame by frame)",
@@ -375,10 +376,10 @@ class SimulationConfig:
         Full-disk mode, with the network: the Gaussian sigma along its cell
         wall over which each concentration is laid
         (`~gongsynth.sun.surface_field.network.SupergranularNetwork`'s
-        ``chain_length``; default 0: at a point).  3-4 Mm gives the network
-        clusters the elongation of real GONG, MDI and HMI maps (docs,
-        decisions: "the disk network's chains"); the shipped full-disk
-        tables were made with 0.
+        ``chain_length``; default its `~gongsynth.sun.surface_field.network.CHAIN_LENGTH`,
+        3 Mm; 0: at a point).  3-4 Mm gives the network clusters the
+        elongation of real GONG, MDI and HMI maps (docs, decisions: "the
+        disk network's chains").
     pointing : tuple of `~astropy.units.Quantity`
         Full-disk mode: helioprojective (Tx, Ty) of the detector's centre
         (default (0, 0): the Sun's centre on the detector's centre; a real
@@ -425,7 +426,7 @@ class SimulationConfig:
     pointing: tuple = (0 * u.arcsec, 0 * u.arcsec)
     instrument: object = field(default_factory=instruments.get)
     network: bool | None = None
-    network_chain_length: u.Quantity = 0 * u.Mm
+    network_chain_length: u.Quantity = CHAIN_LENGTH
 
     def __post_init__(self):
         if self.network is not None and not isinstance(self.network, bool):

@@ -132,14 +132,19 @@ def test_knobs_belong_to_the_chosen_sun():
 
 def test_network_chain_length_reaches_the_network_and_the_header():
     from gongsynth.chain import _network, run_header
+    from gongsynth.sun.surface_field.network import CHAIN_LENGTH
 
     chained = SimulationConfig(mode="full-disk", network_chain_length=4 * u.Mm)
     assert SimulationConfig.from_toml(chained.to_toml()).network_chain_length == 4 * u.Mm
     assert _network(chained).chain_length == 4 * u.Mm
     assert run_header(chained)["netchain"][0] == pytest.approx(4.0)
     default = SimulationConfig(mode="full-disk")
-    assert _network(default).chain_length == 0 * u.Mm
-    assert "netchain" not in run_header(default)          # the default products' headers stay as they were
+    assert _network(default).chain_length == CHAIN_LENGTH == 3 * u.Mm    # the value measured on real maps
+    assert run_header(default)["netchain"][0] == pytest.approx(3.0)
+    points = SimulationConfig(mode="full-disk", network_chain_length=0 * u.Mm)
+    assert run_header(points)["netchain"][0] == 0                    # recorded when off, too
+    assert "netchain" not in run_header(SimulationConfig(mode="full-disk", network=False))
+    assert "netchain" not in run_header(SimulationConfig(mode="tiled"))
     with pytest.raises(ValueError, match="network_chain_length"):
         SimulationConfig(mode="full-disk", network_chain_length=-1 * u.Mm)
     with pytest.raises(u.UnitsError, match="network_chain_length"):

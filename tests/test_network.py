@@ -69,7 +69,7 @@ def test_large_concentrations_spread_no_denser_than_plage():
     """A concentration that would make its grid cell denser than 300 G spreads, keeping its flux."""
     lon = lat = np.linspace(-10, 10, 201)                  # 0.1° cells of ~1.2 Mm: 5e19 Mx would be 3 kG
     kwargs = dict(seed=2, flux_density=1 * u.G, flux_range=(5e19, 1e20) * u.Mx,
-                  ephemeral_flux_density=0 * u.G)
+                  ephemeral_flux_density=0 * u.G, chain_length=0 * u.Mm)   # the spread alone
     zero = np.zeros((lat.size, lon.size))
     point = SupergranularNetwork(cluster_flux_density=None, **kwargs).on_grid(lon, lat, zero)
     spread = SupergranularNetwork(**kwargs).on_grid(lon, lat, zero)
@@ -110,7 +110,7 @@ def test_chains_lay_each_concentration_along_its_wall():
     kwargs = dict(seed=4, flux_density=3 * u.G, flux_range=(5e19, 1e20) * u.Mx,
                   ephemeral_flux_density=0 * u.G, cluster_flux_density=None)
     zero = np.zeros((lat.size, lon.size))
-    point = SupergranularNetwork(**kwargs).on_grid(lon, lat, zero)
+    point = SupergranularNetwork(chain_length=0 * u.Mm, **kwargs).on_grid(lon, lat, zero)
     chain = SupergranularNetwork(chain_length=3 * u.Mm, **kwargs).on_grid(lon, lat, zero)
     area = np.cos(np.radians(lat))[:, None] * np.ones(lon.size)
     inner = (np.abs(lat)[:, None] < 4) & (np.abs(lon)[None, :] < 4)   # away from the region's edge

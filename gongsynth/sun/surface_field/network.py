@@ -54,15 +54,15 @@ instruments, never fitted to one map):
   spreads as a Gaussian of that peak flux density, σ = √(Φ / 2π B), about
   its place (2.3 Mm for 1e20 Mx): a large network cluster is many elements,
   not one.
-- **Chains** (``chain_length``, off by default): each concentration laid
-  along its cell wall as a Gaussian of that sigma, rather than at one grid
-  point.  The real network's clusters at GONG's resolution are elongated
+- **Chains** (``chain_length``, `CHAIN_LENGTH` = 3 Mm by default): each
+  concentration laid along its cell wall as a Gaussian of that sigma, rather
+  than at one grid point.  The real network's clusters at GONG's resolution are elongated
   (median axis ratio 1.33-1.45 on real GONG, MDI and HMI maps) where
   concentrations at points give 1.25-1.27 (noise guide, "the outline"):
   the real network lies in chains of elements along the lanes.  Measured
-  on those three maps, 3-4 Mm matches all of them (docs, decisions: "the
-  disk network's chains"); 0 stays the default until the full-disk tables
-  are rebuilt with it.
+  on those three maps, 3-4 Mm matches all of them, 3 Mm best over four
+  seeds (docs, decisions: "the disk network's chains"); 0 lays every
+  concentration at its point, as before.
 - **Polarity**: the imbalance follows the large-scale field: a concentration
   is positive with probability (1 + f)/2, f = B_r / 5 G clipped to ±1,
   so that the network's mean flux density is the large-scale field's
@@ -95,7 +95,7 @@ from gongsynth.seeding import as_seed_sequence, stage_generator
 from gongsynth.validation import check_quantity
 
 __all__ = ["SupergranularNetwork", "NETWORK_FLUX_DENSITY", "SUPERGRANULE_SIZE", "CLUSTER_FLUX_DENSITY",
-           "EPHEMERAL_FLUX",
+           "CHAIN_LENGTH", "EPHEMERAL_FLUX",
            "EPHEMERAL_FLUX_DENSITY", "EPHEMERAL_SEPARATION"]
 
 #: Mean unsigned network flux density over the quiet Sun (see the module docstring).
@@ -105,6 +105,11 @@ SUPERGRANULE_SIZE = 30 * u.Mm
 #: Densest flux a concentration lays on the grid before it spreads: plage's 100-300 G over ~1″
 #: (Schrijver & Zwaan 2000, ch. 4; the scene's plage level, `gongsynth.stages.scene.library.LEVELS`).
 CLUSTER_FLUX_DENSITY = 300 * u.G
+#: Gaussian sigma along its cell wall over which a concentration is laid: the length that gives the
+#: network's clusters the elongation of real GONG, MDI and HMI maps at GONG's resolution (median axis
+#: ratios 1.41, 1.33, 1.45), least squares over four seeds of runs of those maps' dates
+#: (``scripts/network_chain_length.py``, ``docs/guide/network_chain_length.ecsv``; 4 Mm nearly as good).
+CHAIN_LENGTH = 3 * u.Mm
 
 _CENTRES, _FLUXES, _PLACES, _SIGNS, _EPHEMERAL = range(5)
 
@@ -149,7 +154,8 @@ class SupergranularNetwork:
         concentration in one cell.
     chain_length : `~astropy.units.Quantity`
         Gaussian sigma along the cell wall over which each concentration's
-        flux is laid (0, default: at its grid point, or spread as above).
+        flux is laid (`CHAIN_LENGTH`, 3 Mm, by default; 0: at its grid
+        point, or spread as above).
         Across the wall a concentration keeps its point (or its spread).
     ephemeral_flux_density : `~astropy.units.Quantity`
         Unsigned flux density of the ephemeral regions, bipoles inside the
@@ -176,7 +182,7 @@ class SupergranularNetwork:
     coherence: float = 1.0
     ephemeral_flux_density: u.Quantity = EPHEMERAL_FLUX_DENSITY
     cluster_flux_density: u.Quantity = CLUSTER_FLUX_DENSITY
-    chain_length: u.Quantity = 0 * u.Mm
+    chain_length: u.Quantity = CHAIN_LENGTH
 
     def __post_init__(self):
         for name, unit in (("cell_size", u.km), ("flux_density", u.G), ("lane_width", u.km)):
