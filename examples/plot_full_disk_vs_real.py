@@ -110,29 +110,28 @@ side_by_side(((zooms[0], "gongsynth: 200″ quiet region"), (zooms[1], "real GON
 
 # %%
 # The network's outline: on the real map the network lies in chains along the
-# cell walls, and in the simulated one each concentration is a round spot
-# (it sits at one point of the 0.25° grid and is seen through the PSF).
-# `~gongsynth.analysis.network_clusters.network_clusters` measures each
-# cluster's elongation (the axis ratio of its :math:`|B|`-weighted second moments):
-# the median is 1.33-1.45 on real GONG, MDI and HMI maps and 1.25 on
-# gongsynth's runs.  ``network_chain_length`` lays each concentration along
-# its wall; 3-4 Mm, measured on those three instruments, gives their
-# elongation (the decisions guide: "The disk network's chains").  It is not
-# yet the default, because the shipped full-disk tables were made without
-# it.  The same run with chains of 4 Mm, beside the two above:
+# cell walls.  `~gongsynth.analysis.network_clusters.network_clusters`
+# measures each cluster's elongation (the axis ratio of its
+# :math:`|B|`-weighted second moments): the median is 1.33-1.45 on real GONG,
+# MDI and HMI maps.  Concentrations laid at single points of the 0.25° grid,
+# seen through the PSF, are round spots (1.25); gongsynth lays each one along
+# its cell wall, as a Gaussian of ``network_chain_length`` = 3 Mm (the
+# default, measured on those three instruments: the decisions guide, "The
+# disk network's chains").  The same run with the concentrations at points
+# (``network_chain_length = 0``), the run above, and the real map:
 
-chained = gongsynth.simulate(config=config.replace(network_chain_length=4 * u.Mm), progress=False)
-chained_zoom = chained.magnetogram.submap(
-    SkyCoord(*box["bottom_left"], frame=chained.magnetogram.coordinate_frame),
-    top_right=SkyCoord(*box["top_right"], frame=chained.magnetogram.coordinate_frame))
+points = gongsynth.simulate(config=config.replace(network_chain_length=0 * u.Mm), progress=False)
+points_zoom = points.magnetogram.submap(
+    SkyCoord(*box["bottom_left"], frame=points.magnetogram.coordinate_frame),
+    top_right=SkyCoord(*box["top_right"], frame=points.magnetogram.coordinate_frame))
 fig = plt.figure(figsize=(15, 5), layout="constrained")
-for number, (smap, title) in enumerate(((zooms[0], "gongsynth: concentrations at points"),
-                                        (chained_zoom, "gongsynth: chains of 4 Mm"),
+for number, (smap, title) in enumerate(((points_zoom, "gongsynth: concentrations at points"),
+                                        (zooms[0], "gongsynth: chains of 3 Mm (default)"),
                                         (zooms[1], "real GONG")), 1):
     ax = fig.add_subplot(1, 3, number, projection=smap)
     image = smap.plot(axes=ax, norm=Normalize(-40, 40), cmap="gray", title=title)
 fig.colorbar(image, ax=fig.axes, label="B_LOS (G)", shrink=0.8)
-for label, smap in (("points", quiet.magnetogram), ("chains of 4 Mm", chained.magnetogram),
+for label, smap in (("points", points.magnetogram), ("chains of 3 Mm", quiet.magnetogram),
                     ("real GONG", real)):
     found = network_clusters(smap).summary()
     print(f"{label:>15}: median elongation {found['elongation']:.2f} over {found['shaped']} clusters, "
