@@ -30,7 +30,8 @@ cells, to read beside the measured one).  Nothing is fitted.
 Usage (several minutes on 2 cores; ``--cache DIR`` keeps the three runs' maps)::
 
     python scripts/fulldisk_cross_calibration.py --out docs/guide/fulldisk_cross_calibration.ecsv \
-        --summary docs/guide/fulldisk_cross_calibration.txt [--cache DIR] [--sun S] [--date D]
+        --summary docs/guide/fulldisk_cross_calibration.txt [--cache DIR] [--sun S] [--date D] \
+        [--gong-seeing kolmogorov]
 """
 import argparse
 import datetime
@@ -72,12 +73,19 @@ PAIRS = (("gong", "hmi"), ("gong", "mdi"), ("mdi", "hmi"), ("gong", "truth_gong"
          ("mdi", "truth_mdi"), ("gong", "gong_on_hmi"), ("gong", "gong_on_mdi"))
 
 
-def observe(name, *, date=DATE, seed=SEED, progress=False, cache=None, sun=None):
-    """One instrument's full-disk magnetogram and truth of the Sun of ``date`` (kept in ``cache``)."""
+def observe(name, *, date=DATE, seed=SEED, progress=False, cache=None, sun=None, gong_seeing=None):
+    """
+    One instrument's full-disk magnetogram and truth of the Sun of ``date`` (kept in ``cache``).
+
+    ``gong_seeing``: GONG's ``seeing_profile`` (default the instrument's).
+    """
     paths = None if cache is None else [Path(cache) / f"{name}_{w}.fits" for w in ("magnetogram", "truth")]
     if paths and all(path.exists() for path in paths):
         return tuple(sunpy.map.Map(path) for path in paths)
-    result = gongsynth.simulate(instrument=name, mode="full-disk", seed=seed, obstime=date,
+    instrument = name
+    if name == "gong" and gong_seeing is not None:
+        instrument = family.get("gong").replace(seeing_profile=gong_seeing)
+    result = gongsynth.simulate(instrument=instrument, mode="full-disk", seed=seed, obstime=date,
                                 detector_shape=DETECTORS[name], progress=progress,
                                 **({} if sun is None else {"sun": sun}))
     maps = (result.magnetogram, result.truth)
@@ -118,12 +126,13 @@ def strip_mask(chart, half_width=STRIP):
     return np.abs(offset) <= half_width
 
 
-def charts(date=DATE, seed=SEED, progress=False, cache=None, sun=None):
+def charts(date=DATE, seed=SEED, progress=False, cache=None, sun=None, gong_seeing=None):
     """Every instrument's chart, its truth's, and GONG's put on HMI's and MDI's scales."""
     header = carrington_grid(date)
     out = {}
     for name in DETECTORS:
-        magnetogram, truth = observe(name, date=date, seed=seed, progress=progress, cache=cache, sun=sun)
+        magnetogram, truth = observe(name, date=date, seed=seed, progress=progress, cache=cache, sun=sun,
+                                     gong_seeing=gong_seeing)
         out[name] = on_carrington(magnetogram, header)
         out[f"truth_{name}"] = on_carrington(truth, header)
     for target in ("hmi", "mdi"):
@@ -131,9 +140,9 @@ def charts(date=DATE, seed=SEED, progress=False, cache=None, sun=None):
     return out
 
 
-def build_table(date=DATE, seed=SEED, progress=False, cache=None, sun=None):
+def build_table(date=DATE, seed=SEED, progress=False, cache=None, sun=None, gong_seeing=None):
     """The comparisons of `PAIRS` on the central-meridian strip, one QTable."""
-    maps = charts(date, seed, progress, cache, sun)
+    maps = charts(date, seed, progress, cache, sun, gong_seeing)
     mask = strip_mask(maps["gong"])
     tables = []
     for a, b in PAIRS:
@@ -149,6 +158,7 @@ def build_table(date=DATE, seed=SEED, progress=False, cache=None, sun=None):
         "runs": {name: f"gongsynth.simulate(instrument={name!r}, mode='full-disk', seed={seed}, "
                        f"obstime={date!r}, detector_shape={side}"
                        + ("" if sun is None else f", sun={sun!r}") + ")" for name, side in DETECTORS.items()},
+        "gong_seeing_profile": gong_seeing or family.get("gong").seeing_profile,
         "remap": f"each map binned onto {CELL} helioprojective cells (no PSF), reprojected (exact) onto "
                  f"360 x 180 CEA Carrington cells, divided by mu; cells within {STRIP} of the central "
                  "meridian",
@@ -181,8 +191,11 @@ def main(argv=None):
     parser.add_argument("--cache", type=Path, help="keep the runs' maps here (FITS): a rerun reads them")
     parser.add_argument("--sun", help="the full-disk Sun (default: simulate's, e.g. 'model-atmosphere')")
     parser.add_argument("--date", default=DATE, help=f"the synthetic Sun's date (default {DATE})")
+    parser.add_argument("--gong-seeing", choices=("gaussian", "kolmogorov"),
+                        help="GONG's seeing_profile (default the instrument's)")
     args = parser.parse_args(argv)
-    table = build_table(date=args.date, progress=True, cache=args.cache, sun=args.sun)
+    table = build_table(date=args.date, progress=True, cache=args.cache, sun=args.sun,
+                        gong_seeing=args.gong_seeing)
     small = summary(table)
     small.pprint(max_width=-1, max_lines=-1)
     if args.summary:

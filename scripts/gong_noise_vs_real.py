@@ -13,6 +13,7 @@ the count levels of `gongsynth.analysis.count_levels`) and
     python scripts/gong_noise_vs_real.py --out OUT --name before \
         --off frame_seeing minute_average image_rotation
     python scripts/gong_noise_vs_real.py --out OUT --name bilinear --interpolant linear
+    python scripts/gong_noise_vs_real.py --out OUT --name kolmogorov --seeing-profile kolmogorov
     python scripts/gong_noise_vs_real.py --out OUT --collect docs/guide/gong_noise_vs_real.ecsv
 
 Takes about 2-4 minutes on two cores.
@@ -39,6 +40,7 @@ def main(argv=None):
     parser.add_argument("--like-counts", action="store_true",
                         help="the file's count level (like_counts: its DIODE sums) instead of an area")
     parser.add_argument("--interpolant", default=None, help="image_interpolant (default the instrument's)")
+    parser.add_argument("--seeing-profile", default=None, help="seeing_profile (default the instrument's)")
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--collect", type=Path, default=None,
                         help="write the runs' numbers in OUT/*.json to this ECSV table (no run)")
@@ -62,6 +64,8 @@ def main(argv=None):
         instrument = instrument.replace(effective_area=args.effective_area * u.cm**2)
     if args.interpolant is not None:
         instrument = instrument.replace(image_interpolant=args.interpolant)
+    if args.seeing_profile is not None:
+        instrument = instrument.replace(seeing_profile=args.seeing_profile)
     # GONG's real noise on (opt-in in gongsynth's defaults), then what the command line switches off.
     effects = Effects(**{"frame_seeing": True, "minute_average": True, "image_rotation": True,
                          **dict.fromkeys(args.off, False)})
@@ -79,7 +83,8 @@ def main(argv=None):
                for key in table.colnames if key != "map"}
     levels = count_levels(gongsynth.load_observation(BIG_BEAR_INTENSITY, kind="continuum"), result)
     out = {"name": args.name, "effects_off": args.off, "effective_area_cm2": instrument.effective_area.value,
-           "image_interpolant": instrument.image_interpolant, "like_counts": args.like_counts,
+           "image_interpolant": instrument.image_interpolant, "seeing_profile": instrument.seeing_profile,
+           "like_counts": args.like_counts,
            "effarea_header": result.raw.header.get("EFFAREA"),
            "image_rotation_angle_deg": instrument.image_rotation_angle.to_value(u.deg),
            "rows": list(table["map"]), "numbers": numbers,
@@ -108,13 +113,14 @@ def collect(folder, table_path):
     keys = ("ks", "ks_centred", "mean_abs", "mean_abs_centred", "noise_box", "noise_difference", "p99",
             "p999")
     rows = [{"run": "real (Big Bear 2009-09-05 18:54)", "effective_area": np.nan, "like_counts": False,
-             "effects_off": "", "interpolant": "",
+             "effects_off": "", "interpolant": "", "seeing_profile": "",
              **{k: runs[0]["numbers"][k][1] if k not in ("ks", "ks_centred") else np.nan for k in keys},
              "power_ratio_min": np.nan, "power_ratio_max": np.nan}]
     for r in runs:
         rows.append({"run": r["name"], "effective_area": r.get("effarea_header") or r["effective_area_cm2"],
                      "like_counts": bool(r.get("like_counts")), "effects_off": " ".join(r["effects_off"]),
                      "interpolant": r.get("image_interpolant", ""),
+                     "seeing_profile": r.get("seeing_profile", "gaussian"),
                      **{k: r["numbers"][k][0] for k in keys},
                      "power_ratio_min": r["power_ratio_5_100"][0],
                      "power_ratio_max": r["power_ratio_5_100"][1]})

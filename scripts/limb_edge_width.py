@@ -14,7 +14,9 @@ last few arcsec, where I(μ) falls to 0.35 of disk centre: the linear laws
 0.4 + 0.6 μ and 0.25 + 0.75 μ give 2.32 and 2.69 px at 3.6″ seeing, against
 2.56 px for Neckel & Labs') through gongsynth's GONG PSF
 (`gongsynth.stages.psf.psf_kernel`, Airy pattern of the 2.8 cm aperture ⊗
-Gaussian seeing) and the 2.56″ pixel, for several seeing FWHMs::
+seeing) and the 2.56″ pixel, for several seeing FWHMs, with the paper's
+Gaussian seeing and with Kolmogorov's long-exposure seeing of the same FWHM
+(the instrument's ``seeing_profile``)::
 
     python scripts/limb_edge_width.py
 
@@ -28,7 +30,7 @@ import numpy as np
 REAL = Path(os.environ.get("GONGSYNTH_REAL_DATA", Path(__file__).resolve().parents[2] / "shared" / "data"
                            / "real"))
 INTENSITY = REAL / "gong" / "bbiqa090905t1854.fits.gz"
-SEEING_FWHMS = (0.0, 2.0, 3.6, 4.5, 5.5, 6.0, 6.5, 7.0)
+SEEING_FWHMS = (0.0, 2.0, 3.0, 3.6, 4.0, 4.5, 5.5)
 PIXEL_ARCSEC, INSIDE_PX = 2.56, 6.0
 
 
@@ -60,7 +62,7 @@ def real_width():
     return edge_width(0.5 * (bins[1:] + bins[:-1]), profile)
 
 
-def model_width(seeing_fwhm, step=0.1):
+def model_width(seeing_fwhm, step=0.1, profile="gaussian"):
     """The edge width of a straight limb through gongsynth's GONG PSF of that seeing and the pixel."""
     import astropy.units as u
     from scipy.ndimage import uniform_filter1d
@@ -69,7 +71,7 @@ def model_width(seeing_fwhm, step=0.1):
     from gongsynth.stages.psf import psf_kernel
     from gongsynth.sun.photosphere.line import NECKEL_LABS_676
 
-    gong = gongsynth.GONGInstrument()
+    gong = gongsynth.GONGInstrument(seeing_profile=profile)
     if seeing_fwhm > 0:
         gong = gong.replace(seeing_fwhm=seeing_fwhm * u.arcsec)
     line_spread = psf_kernel(step * u.arcsec, gong, shape=801, seeing=seeing_fwhm > 0).sum(axis=0)
@@ -84,7 +86,8 @@ def main():
     """Print the real width and the model's for each seeing."""
     print(f"real Big Bear intensity image: 80-20 % limb width {real_width():.2f} px")
     for fwhm in SEEING_FWHMS:
-        print(f"gongsynth PSF, seeing FWHM {fwhm:.1f}″: {model_width(fwhm):.2f} px")
+        print(f"gongsynth PSF, seeing FWHM {fwhm:.1f}″: {model_width(fwhm):.2f} px Gaussian, "
+              f"{model_width(fwhm, profile='kolmogorov'):.2f} px Kolmogorov")
 
 
 if __name__ == "__main__":

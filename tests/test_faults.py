@@ -315,7 +315,7 @@ def test_every_instrument_field_has_a_range():
     from gongsynth.instrument import _RANGES
 
     numeric = {f.name for f in dataclasses.fields(GONGInstrument)
-               if f.name not in ("prefilter_form", "image_interpolant")}
+               if f.name not in ("prefilter_form", "image_interpolant", "seeing_profile")}
     angles = {"lyot_angle_1", "lyot_angle_2", "lyot_angle_3", "michelson_angle",
               "image_rotation_angle"}  # any angle is valid
     assert numeric - angles - {"detector_map_seed"} == set(_RANGES)

@@ -124,6 +124,32 @@ def test_seeing_broadens_the_psf():
     assert widths[0] < widths[1] < widths[2]
 
 
+def test_kolmogorov_seeing_keeps_the_fwhm_and_has_heavier_wings():
+    """r0 = 0.976 λ/FWHM gives the Kolmogorov long-exposure profile the FWHM asked for, with heavier wings."""
+    r = np.arange(0, 60.0001, 0.01)
+    big = {"aperture": 1 * u.m, "seeing_fwhm": 3.6 * u.arcsec}       # the Airy core 0.14": seeing alone
+    kolmogorov = psf_profile(r * u.arcsec, GONGInstrument(seeing_profile="kolmogorov", **big)).value
+    gaussian = psf_profile(r * u.arcsec, GONGInstrument(**big)).value
+    both = np.concatenate([-r[:0:-1], r])
+    for profile in (kolmogorov, gaussian):
+        assert fwhm(both, np.concatenate([profile[:0:-1], profile])) == pytest.approx(3.6, rel=0.02)
+        assert np.trapezoid(2 * np.pi * r * profile, r) == pytest.approx(1, abs=2e-3)
+
+    def beyond(profile, radius):
+        inside = r <= radius
+        return 1 - np.trapezoid(2 * np.pi * r[inside] * profile[inside], r[inside])
+
+    # Beyond two FWHM a Gaussian keeps 2**-16 of its light (here the 1 m Airy wings' 0.4 %);
+    # Kolmogorov's r^(-11/3) wings keep percents.
+    assert beyond(gaussian, 7.2) < 0.006 and beyond(kolmogorov, 7.2) > 0.03
+    # GONG's own PSF: the same seeing FWHM moves light from the core to the wings.
+    core = [psf_profile(r * u.arcsec, GONGInstrument(seeing_profile=shape)).value for shape in ("gaussian",
+                                                                                               "kolmogorov")]
+    assert beyond(core[1], 5.0) > beyond(core[0], 5.0) + 0.03
+    with pytest.raises(ValueError, match="seeing_profile"):
+        GONGInstrument(seeing_profile="moffat")
+
+
 # ----------------------------------------------------------- convolution
 @pytest.mark.parametrize("boundary, mode", [("periodic", "wrap"), ("zero", "constant"),
                                             ("reflect", "reflect")])

@@ -1,20 +1,27 @@
 r"""
-The point-spread function of an instrument: Airy pattern of its aperture ⊗ Gaussian seeing.
+The point-spread function of an instrument: Airy pattern of its aperture ⊗ seeing.
 
 The PSF is the Airy pattern of the circular aperture D at the line wavelength
-λ0 convolved with Gaussian seeing (paper Sec. 3.2, design §3.9).  Both factors
+λ0 convolved with the seeing (paper Sec. 3.2, design §3.9).  Both factors
 are known in Fourier space, so the radial profile is the Hankel transform of
 the product of their optical transfer functions,
 
 .. math::
 
     \mathrm{PSF}(r) = 2\pi\int_0^{\nu_c} \mathrm{OTF}_\mathrm{Airy}(\nu)\,
-        e^{-2\pi^2\sigma^2\nu^2}\,J_0(2\pi\nu r)\,\nu\,d\nu, \qquad
+        \mathrm{OTF}_\mathrm{seeing}(\nu)\,J_0(2\pi\nu r)\,\nu\,d\nu, \qquad
     \mathrm{OTF}_\mathrm{Airy}(\nu) = \tfrac{2}{\pi}\big[\arccos s - s\sqrt{1-s^2}\big],
     \; s = \nu/\nu_c,
 
 with cut-off :math:`\nu_c = D/\lambda_0` (0.2006 cycles per arcsec for
-D = 2.8 cm).  The profile has unit integral over the plane and its first
+D = 2.8 cm).  The seeing is the paper's Gaussian of FWHM ``seeing_fwhm``,
+:math:`\mathrm{OTF}_\mathrm{seeing} = e^{-2\pi^2\sigma^2\nu^2}`, or, with
+the instrument's ``seeing_profile = "kolmogorov"``, the long-exposure
+transfer function of Kolmogorov turbulence (Fried 1966, JOSA 56, 1372),
+:math:`e^{-3.44(\lambda_0\nu/r_0)^{5/3}}` (ν per radian), with the Fried
+parameter of the same FWHM, :math:`r_0 = 0.976\,\lambda_0/\mathrm{FWHM}`
+(`KOLMOGOROV_FWHM`; 3.8 cm for 3.6″): the same core, heavier wings.  The
+profile has unit integral over the plane and its first
 Airy zero lies at :math:`1.22\lambda_0/D \approx 6.08''`.  Because the PSF is
 band limited, point samples on any grid finer than :math:`\lambda_0/(2D)
 \approx 2.49''` represent it exactly; kernels are point samples normalised to
@@ -44,13 +51,17 @@ import scipy.special
 from gongsynth import instruments
 from gongsynth.validation import check_finite
 
-__all__ = ["psf_profile", "psf_kernel", "normalize_kernel", "psf_instrument", "wrapped_kernel", "fft_workers"]
+__all__ = ["psf_profile", "psf_kernel", "normalize_kernel", "psf_instrument", "wrapped_kernel", "fft_workers",
+           "KOLMOGOROV_FWHM"]
 
 # Gauss-Legendre nodes of the Hankel transform over [0, ν_c]: the integrand
 # oscillates ν_c r ≈ 30 times at r = 150″; 768 nodes give < 1e-9 relative error.
 _N_HANKEL = 768
 # Radial sampling (arcsec) of the profile that `psf_kernel` interpolates.
 _SPLINE_STEP = 0.05
+#: FWHM of Kolmogorov long-exposure seeing in units of λ/r0 (Dierickx 1992, J. Mod. Opt. 39, 569;
+#: Tokovinin 2002, PASP 114, 1156, for an infinite outer scale).
+KOLMOGOROV_FWHM = 0.976
 
 
 def _cutoff_per_arcsec(inst):
@@ -60,6 +71,19 @@ def _cutoff_per_arcsec(inst):
 
 def _seeing_sigma(inst):
     return inst.seeing_fwhm.to_value(u.arcsec) / (2 * math.sqrt(2 * math.log(2)))
+
+
+def _seeing_otf(nu, inst):
+    """The seeing's transfer function at ``nu`` (cycles per arcsec): Gaussian or Kolmogorov."""
+    if getattr(inst, "seeing_profile", "gaussian") == "gaussian":
+        return np.exp(-2 * math.pi**2 * _seeing_sigma(inst) ** 2 * nu**2)
+    fwhm = inst.seeing_fwhm.to_value(u.rad)
+    if fwhm == 0:
+        return np.ones_like(nu)
+    wavelength = inst.line_wavelength.to_value(u.m)
+    fried = KOLMOGOROV_FWHM * wavelength / fwhm          # r0 of that FWHM
+    baseline = wavelength * nu / u.arcsec.to(u.rad)      # λν, ν in cycles per radian
+    return np.exp(-3.44 * (baseline / fried) ** (5 / 3))
 
 
 @functools.lru_cache(maxsize=1)
@@ -108,10 +132,9 @@ def _profile(radius, inst):
     if model is not None:
         return model(np.asarray(radius, dtype=float), inst)
     nu_c = _cutoff_per_arcsec(inst)
-    sigma = _seeing_sigma(inst)
     s, w = _hankel_nodes()
     otf = (2 / math.pi) * (np.arccos(s) - s * np.sqrt(1 - s * s))
-    otf *= np.exp(-2 * math.pi**2 * sigma**2 * (s * nu_c) ** 2)
+    otf *= _seeing_otf(s * nu_c, inst)
     weight = 2 * math.pi * nu_c**2 * w * s * otf  # dν = ν_c ds, ν = ν_c s
     r = np.asarray(radius, dtype=float)
     flat, inverse = np.unique(r.ravel(), return_inverse=True)
@@ -152,7 +175,7 @@ def psf_instrument(instrument=None, *, seeing=True):
 @u.quantity_input
 def psf_profile(radius: u.arcsec, instrument=None, *, seeing=True):
     """
-    Radial profile of the PSF (Airy ⊗ Gaussian seeing), unit integral over the plane.
+    Radial profile of the PSF (Airy ⊗ seeing), unit integral over the plane.
 
     Parameters
     ----------

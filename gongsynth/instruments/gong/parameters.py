@@ -22,10 +22,12 @@ from gongsynth.instruments.parameters import InstrumentParameters, gauss_per_zee
 from gongsynth.instruments.parameters import plain_field as _plain
 from gongsynth.instruments.parameters import quantity_field as _param
 
-__all__ = ["GONGInstrument", "PREFILTER_FORMS", "resolve_instrument"]
+__all__ = ["GONGInstrument", "PREFILTER_FORMS", "SEEING_PROFILES", "resolve_instrument"]
 
 #: Accepted values of `GONGInstrument.prefilter_form`.
 PREFILTER_FORMS = ("memo", "ideal")
+#: Accepted values of `GONGInstrument.seeing_profile` (`gongsynth.stages.psf`).
+SEEING_PROFILES = ("gaussian", "kolmogorov")
 
 
 @dataclass(frozen=True, eq=False)
@@ -83,7 +85,11 @@ class GONGInstrument(InstrumentParameters):
     supersampling : int
         Resampling factor before binning to GONG pixels, 5 (paper, Sec. 3.2).
     seeing_fwhm : `~astropy.units.Quantity`, angle
-        FWHM of the Gaussian seeing kernel, 3.6 arcsec (paper, Sec. 3.2).
+        FWHM of the seeing kernel, 3.6 arcsec (paper, Sec. 3.2).
+    seeing_profile : str
+        Its shape (`gongsynth.stages.psf`): ``"gaussian"`` (the paper's), or
+        ``"kolmogorov"``, the long-exposure seeing of Kolmogorov turbulence
+        (Fried 1966), whose wings are heavier for the same FWHM.
     seeing_wind_speed : `~astropy.units.Quantity`, speed
         Frame-to-frame seeing (`gongsynth.stages.seeing`): speed of the
         turbulence that moves the image, 5 m/s (a choice: a typical near-ground
@@ -228,7 +234,8 @@ class GONGInstrument(InstrumentParameters):
     plate_scale: u.Quantity = _param(2.5, u.arcsec, "detector pixel on the sky (paper Sec. 2)")
     detector_shape: int = _plain(860, int, "detector side in pixels (GONG full disk)")
     supersampling: int = _plain(5, int, "resampling factor before binning (paper Sec. 3.2)")
-    seeing_fwhm: u.Quantity = _param(3.6, u.arcsec, "Gaussian seeing FWHM (paper Sec. 3.2)")
+    seeing_fwhm: u.Quantity = _param(3.6, u.arcsec, "seeing FWHM (paper Sec. 3.2)")
+    seeing_profile: str = _plain("gaussian", str, "seeing's shape: 'gaussian' (the paper) or 'kolmogorov'")
     seeing_wind_speed: u.Quantity = _param(5.0, u.m / u.s, "frame seeing: speed of the turbulence (a choice)")
     seeing_outer_scale: u.Quantity = _param(20.0, u.m, "frame seeing: outer scale L0 (Ziad et al. 2004)")
     seeing_layer_height: u.Quantity = _param(100.0, u.m, "frame seeing: height of the turbulence (a choice)")
@@ -283,6 +290,9 @@ class GONGInstrument(InstrumentParameters):
 
     def __post_init__(self):
         super().__post_init__()
+        if self.seeing_profile not in SEEING_PROFILES:
+            raise ValueError(f"GONGInstrument.seeing_profile must be one of {SEEING_PROFILES}, "
+                             f"got {self.seeing_profile!r}")
         if self.image_interpolant not in INTERPOLANTS:
             raise ValueError(f"GONGInstrument.image_interpolant must be one of {sorted(INTERPOLANTS)}, "
                              f"got {self.image_interpolant!r}")

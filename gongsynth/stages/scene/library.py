@@ -378,8 +378,8 @@ def cache_directory():
 #: is part of the key, so that one instrument's library is never taken for another's; a parameter a
 #: new instrument adds is in the key until it is listed here (a rebuild, never a wrong reuse).
 _NOT_IN_KEY = frozenset((
-    "aperture", "plate_scale", "detector_shape", "supersampling", "seeing_fwhm", "psf_radius",
-    "seeing_wind_speed", "seeing_outer_scale", "seeing_layer_height", "magnetogram_cadence",
+    "aperture", "plate_scale", "detector_shape", "supersampling", "seeing_fwhm", "seeing_profile",
+    "psf_radius", "seeing_wind_speed", "seeing_outer_scale", "seeing_layer_height", "magnetogram_cadence",
     "effective_area",
     "quantum_efficiency", "gain", "read_noise", "full_well", "adc_bits", "exposure_time", "frame_rate",
     "frame_interval", "waveplate_rate", "lcvr_period", "sequence_cadence", "vector_cycle", "vector_window",
