@@ -560,6 +560,8 @@ def run_header(config):
         "simmode": (config.mode, "scene mode"),
         "seed": (str(config.seed), "root random seed"),
         "seeing": (inst.seeing_fwhm.to_value(u.arcsec), "[arcsec] seeing FWHM"),
+        **({"seeprof": (inst.seeing_profile, "seeing profile")}      # only where not the paper's Gaussian
+           if getattr(inst, "seeing_profile", "gaussian") != "gaussian" else {}),
         "aeff": (inst.effective_area.to_value(u.cm**2), "[cm2] effective area"),
         "gain": (inst.gain.to_value(u.electron / u.adu), "[e/ADU] gain"),
         "rdnoise": (inst.read_noise.to_value(u.adu), "[ADU] read noise"),

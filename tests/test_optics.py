@@ -148,6 +148,12 @@ def test_kolmogorov_seeing_keeps_the_fwhm_and_has_heavier_wings():
     assert beyond(core[1], 5.0) > beyond(core[0], 5.0) + 0.03
     with pytest.raises(ValueError, match="seeing_profile"):
         GONGInstrument(seeing_profile="moffat")
+    # The products say which: a Kolmogorov run's header, not the default's.
+    from gongsynth.chain import run_header
+    from gongsynth.config import SimulationConfig
+    assert "seeprof" not in run_header(SimulationConfig())
+    kolmogorov = SimulationConfig(instrument=GONGInstrument(seeing_profile="kolmogorov"))
+    assert run_header(kolmogorov)["seeprof"][0] == "kolmogorov"
 
 
 # ----------------------------------------------------------- convolution
