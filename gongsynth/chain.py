@@ -46,6 +46,7 @@ from gongsynth.stages import optics
 from gongsynth.stages.averaging import average_observables, minutes_in, sum_planes
 from gongsynth.stages.camera.integrate import integrate
 from gongsynth.stages.channels import channel_images
+from gongsynth.stages.psf import seeing_profile
 from gongsynth.stages.reduction import BAND_PIXELS, reduce
 from gongsynth.stages.scene.fulldisk import full_disk_scene
 from gongsynth.stages.scene.library import LIBRARY_SEED, cached_library
@@ -560,8 +561,8 @@ def run_header(config):
         "simmode": (config.mode, "scene mode"),
         "seed": (str(config.seed), "root random seed"),
         "seeing": (inst.seeing_fwhm.to_value(u.arcsec), "[arcsec] seeing FWHM"),
-        **({"seeprof": (inst.seeing_profile, "seeing profile")}      # only where not the paper's Gaussian
-           if getattr(inst, "seeing_profile", "gaussian") != "gaussian" else {}),
+        **({"seeprof": (seeing_profile(inst), "seeing profile")}      # only where not the paper's Gaussian
+           if seeing_profile(inst) != "gaussian" else {}),
         "aeff": (inst.effective_area.to_value(u.cm**2), "[cm2] effective area"),
         "gain": (inst.gain.to_value(u.electron / u.adu), "[e/ADU] gain"),
         "rdnoise": (inst.read_noise.to_value(u.adu), "[ADU] read noise"),

@@ -52,7 +52,7 @@ from gongsynth import instruments
 from gongsynth.validation import check_finite
 
 __all__ = ["psf_profile", "psf_kernel", "normalize_kernel", "psf_instrument", "wrapped_kernel", "fft_workers",
-           "KOLMOGOROV_FWHM"]
+           "seeing_profile", "KOLMOGOROV_FWHM"]
 
 # Gauss-Legendre nodes of the Hankel transform over [0, ν_c]: the integrand
 # oscillates ν_c r ≈ 30 times at r = 150″; 768 nodes give < 1e-9 relative error.
@@ -73,9 +73,22 @@ def _seeing_sigma(inst):
     return inst.seeing_fwhm.to_value(u.arcsec) / (2 * math.sqrt(2 * math.log(2)))
 
 
+def seeing_profile(instrument):
+    """
+    The shape of an instrument's seeing: its ``seeing_profile``, or ``"gaussian"`` (the paper's) if none.
+
+    Examples
+    --------
+    >>> from gongsynth import GONGInstrument
+    >>> seeing_profile(GONGInstrument()), seeing_profile(GONGInstrument(seeing_profile="kolmogorov"))
+    ('gaussian', 'kolmogorov')
+    """
+    return getattr(instrument, "seeing_profile", "gaussian")
+
+
 def _seeing_otf(nu, inst):
     """The seeing's transfer function at ``nu`` (cycles per arcsec): Gaussian or Kolmogorov."""
-    if getattr(inst, "seeing_profile", "gaussian") == "gaussian":
+    if seeing_profile(inst) == "gaussian":
         return np.exp(-2 * math.pi**2 * _seeing_sigma(inst) ** 2 * nu**2)
     fwhm = inst.seeing_fwhm.to_value(u.rad)
     if fwhm == 0:
