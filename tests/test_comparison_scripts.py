@@ -1,0 +1,96 @@
+"""The measurements of two comparison scripts: published cross-calibration factors, network polarity."""
+import importlib.util
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+SCRIPTS = Path(__file__).resolve().parents[1] / "scripts"
+
+
+def _script(name):
+    path = SCRIPTS / f"{name}.py"
+    if not path.exists():
+        pytest.skip("needs a source checkout")
+    sys.path.insert(0, str(SCRIPTS))      # the polarity script imports its sibling's runs
+    try:
+        spec = importlib.util.spec_from_file_location(name, path)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+    finally:
+        sys.path.remove(str(SCRIPTS))
+    return module
+
+
+def _fulldisk_table(path, slopes):
+    from astropy.table import Table
+
+    rows = [(a, b, 0.0, 90.0, 0.0, np.inf, slope) for (a, b), slope in slopes.items()]
+    rows.append(("gong", "hmi", 0.0, 15.0, 0.0, np.inf, 99.0))     # a band row: must not be read
+    Table(rows=rows, names=("map_a", "map_b", "angle_min", "angle_max", "strength_min", "strength_max",
+                            "slope")).write(path, format="ascii.ecsv")
+
+
+def test_one_shared_factor_is_read_back_from_both_ratios(tmp_path):
+    published = _script("published_cross_calibration")
+    ratios = published.published_ratios()
+    assert ratios["mdi/gong"] == pytest.approx(ratios["hmi/gong"] * ratios["mdi/hmi"])
+    # A model whose Ni I instruments both read 1.2 times more, against HMI, than the published factors.
+    shared = 1.2
+    _fulldisk_table(tmp_path / "run.ecsv", {("gong", "hmi"): ratios["hmi/gong"] / shared,
+                                            ("mdi", "hmi"): 1 / (ratios["mdi/hmi"] * shared),
+                                            ("gong", "mdi"): ratios["mdi/gong"]})
+    model = published.modelled_ratios(tmp_path / "run.ecsv")
+    assert ratios["hmi/gong"] / model["hmi/gong"] == pytest.approx(shared)
+    assert model["mdi/hmi"] / ratios["mdi/hmi"] == pytest.approx(shared)
+    assert model["mdi/gong"] == pytest.approx(ratios["mdi/gong"])
+
+
+def test_the_guide_shows_the_shipped_tables_comparison():
+    published = _script("published_cross_calibration")
+    shipped = published.GUIDE / "published_cross_calibration.txt"
+    if not shipped.exists():
+        pytest.skip("needs a source checkout")
+    assert shipped.read_text() == published.summary()
+
+
+def _peaks(rng, shape, n, plateau=0.0):
+    """Isolated 60 G peaks of random sign, each on a same-signed disc of ``plateau`` G, in a 2-G noise."""
+    field = rng.normal(0.0, 2.0, shape)
+    rows = rng.integers(25, shape[0] - 25, n)
+    cols = rng.integers(25, shape[1] - 25, n)
+    yy, xx = np.mgrid[:shape[0], :shape[1]]
+    for row, col in zip(rows, cols):
+        sign = rng.choice((-1.0, 1.0))
+        near = (yy - row) ** 2 + (xx - col) ** 2
+        field += sign * np.where(near <= 20 ** 2, plateau, 0.0)
+        field[row, col] += sign * 60.0
+    return field
+
+
+@pytest.mark.parametrize("plateau", [0.0, 3.0])
+def test_the_polarity_halo_reads_a_same_signed_neighbourhood(plateau):
+    polarity = _script("network_polarity_vs_real")
+    rng = np.random.default_rng(3)
+    shape = (300, 300)
+    field = _peaks(rng, shape, 12, plateau)
+    good = np.ones(shape, dtype=bool)
+    radius = np.zeros(shape)
+    used, halo = polarity.polarity_halo(field, good, radius, 1.0, peaks=(25.0, 80.0), bands=((7.0, 14.0),))
+    assert used >= 10
+    # The noise's mean over a ring of ~460 pixels, over >= 10 peaks: 2 / sqrt(4600) = 0.03 G (5 sigma).
+    assert halo[0] == pytest.approx(plateau, abs=0.15)
+
+
+def test_the_large_scale_balance_of_white_noise_falls_as_the_smoothing_area():
+    polarity = _script("network_polarity_vs_real")
+    rng = np.random.default_rng(4)
+    shape = (400, 400)
+    field = rng.normal(0.0, 5.0, shape)
+    good = np.ones(shape, dtype=bool)
+    radius = np.zeros(shape)
+    rms = polarity.large_scale_balance(field, good, radius, 1.0, sigmas=(4.0, 8.0))
+    # White noise of 5 G smoothed by a Gaussian of sigma s pixels: 5 / (2 sqrt(pi) s).
+    expected = [5.0 / (2 * np.sqrt(np.pi) * s) for s in (4.0, 8.0)]
+    assert rms == pytest.approx(expected, rel=0.1)
