@@ -17,9 +17,11 @@ both off by one factor X against HMI (Fe I 617.3 nm), the published HMI/GONG
 would be X times gongsynth's, the published MDI/HMI gongsynth's over X, and
 MDI/GONG would agree; the table gives X from each of the first two.
 
-Writes ``--summary`` (an RST table for the cross-calibration guide)::
+Writes ``--summary`` (an RST table for the cross-calibration guide) and ``--table`` (the same as
+ECSV, which the gallery draws)::
 
-    python scripts/published_cross_calibration.py --summary docs/guide/published_cross_calibration.txt
+    python scripts/published_cross_calibration.py --summary docs/guide/published_cross_calibration.txt \
+        --table docs/guide/published_cross_calibration.ecsv
 
 Reads the tables in ``docs/guide``; takes a second.
 """
@@ -60,17 +62,34 @@ def modelled_ratios(path):
             "mdi/gong": slope("gong", "mdi")}
 
 
-def summary(guide=GUIDE):
-    """The RST table: each run's three ratios, the published ones and the shared factor X of each."""
+def comparison_table(guide=GUIDE):
+    """
+    An astropy Table: the published ratios, then each run's and the shared factor X from each ratio.
+
+    Columns ``run``, ``hmi_over_gong``, ``mdi_over_hmi``, ``mdi_over_gong``, ``x_from_hmi_gong`` and
+    ``x_from_mdi_hmi`` (NaN on the published row).
+    """
+    from astropy.table import Table
+
     published = published_ratios()
-    header = ("run", "HMI/GONG", "MDI/HMI", "MDI/GONG", "X from HMI/GONG", "X from MDI/HMI")
-    lines = [header, ("Liu et al. 2025 (published)", f"{published['hmi/gong']:.3f}",
-                      f"{published['mdi/hmi']:.3f}", f"{published['mdi/gong']:.3f}", "", "")]
+    rows = [("Liu et al. 2025 (published)", published["hmi/gong"], published["mdi/hmi"],
+             published["mdi/gong"], float("nan"), float("nan"))]
     for name, label in RUNS:
         model = modelled_ratios(guide / name)
-        lines.append((f"gongsynth: {label}", f"{model['hmi/gong']:.3f}", f"{model['mdi/hmi']:.3f}",
-                      f"{model['mdi/gong']:.3f}", f"{published['hmi/gong'] / model['hmi/gong']:.3f}",
-                      f"{model['mdi/hmi'] / published['mdi/hmi']:.3f}"))
+        rows.append((f"gongsynth: {label}", model["hmi/gong"], model["mdi/hmi"], model["mdi/gong"],
+                     published["hmi/gong"] / model["hmi/gong"], model["mdi/hmi"] / published["mdi/hmi"]))
+    table = Table(rows=rows, names=("run", "hmi_over_gong", "mdi_over_hmi", "mdi_over_gong",
+                                    "x_from_hmi_gong", "x_from_mdi_hmi"))
+    table.meta["description"] = ("gongsynth's full-disk HMI/GONG, MDI/HMI and MDI/GONG beside Liu et al. "
+                                 "(2025, Sol. Phys. 300, 8); scripts/published_cross_calibration.py")
+    return table
+
+
+def summary(table):
+    """``comparison_table``'s rows as an RST simple table (three decimals, blank for NaN)."""
+    header = ("run", "HMI/GONG", "MDI/HMI", "MDI/GONG", "X from HMI/GONG", "X from MDI/HMI")
+    lines = [header] + [(row["run"],) + tuple("" if value != value else f"{value:.3f}"
+                                               for value in list(row)[1:]) for row in table]
     widths = [max(len(line[i]) for line in lines) for i in range(len(header))]
     rule = "  ".join("=" * w for w in widths)
     text = [rule, "  ".join(h.ljust(w) for h, w in zip(header, widths)), rule]
@@ -80,15 +99,19 @@ def summary(guide=GUIDE):
 
 
 def main(argv=None):
-    """Print the comparison, and write it to ``--summary`` if given."""
+    """Print the comparison; write it to ``--summary`` (RST) and ``--table`` (ECSV) if given."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
     parser.add_argument("--summary", type=Path, help="RST file to write")
+    parser.add_argument("--table", type=Path, help="ECSV file to write")
     args = parser.parse_args(argv)
-    text = summary()
+    table = comparison_table()
+    text = summary(table)
     print(text, end="")
     if args.summary is not None:
         args.summary.write_text(text)
-    return text
+    if args.table is not None:
+        table.write(args.table, format="ascii.ecsv", overwrite=True)
+    return table
 
 
 if __name__ == "__main__":
