@@ -166,10 +166,12 @@ for row in centre:
 # HMI's scale with a factor 1.438 and MDI's with 0.701.
 # ``scripts/published_cross_calibration.py`` sets beside them the ratios of
 # one full-disk Sun observed by gongsynth's three instruments (1° Carrington
-# cells near the central meridian, the Cross-calibration guide's runs).
-# MDI/GONG, two instruments on the same Ni I line, agrees; HMI/GONG and
+# cells near the central meridian, the Cross-calibration guide's runs) and
+# the shipped conversion table's at disk centre and 45°.  On the full-disk
+# cells MDI/GONG, two instruments on the same Ni I line, agrees; HMI/GONG and
 # MDI/HMI miss in opposite directions by one shared factor of about 1.2:
-# gongsynth puts its two Ni I instruments about 20 % too high against HMI.
+# gongsynth puts its two Ni I instruments about 20 % too high against HMI
+# (the table's disk centre, where GONG's resolution weighs most, less so).
 published = QTable.read(GUIDE / "published_cross_calibration.ecsv")
 ratios = {"hmi_over_gong": "HMI / GONG", "mdi_over_hmi": "MDI / HMI", "mdi_over_gong": "MDI / GONG"}
 fig, ax = plt.subplots(figsize=(7, 4), layout="constrained")
@@ -181,7 +183,7 @@ for k, row in enumerate(published):
             label=row["run"], **style)
 ax.set_xticks(np.arange(len(ratios)), list(ratios.values()))
 ax.set_xlim(-0.6, len(ratios) - 0.4)
-ax.set_ylabel("full-disk ratio")
+ax.set_ylabel("ratio of the two instruments' readings")
 ax.legend(fontsize=8, loc="upper left")
 for row in published[1:]:
     print(f"{row['run']}: shared factor X = {row['x_from_hmi_gong']:.2f} (from HMI/GONG), "

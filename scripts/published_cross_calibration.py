@@ -11,7 +11,9 @@ al. (2012, Sol. Phys. 279, 295) found MDI about 1.4 times HMI.
 
 gongsynth's numbers are the bisector slopes over every cell and field strength
 of ``scripts/fulldisk_cross_calibration.py``'s tables (one Sun seen by the
-three instruments, 1° Carrington cells within 10° of the central meridian).
+three instruments, 1° Carrington cells within 10° of the central meridian),
+and the shipped conversion table's factors (10″ cells of the default Sun, a
+sunspot box) at disk centre and 45°.
 If gongsynth's GONG and MDI, which observe the same Ni I 676.8 nm line, were
 both off by one factor X against HMI (Fe I 617.3 nm), the published HMI/GONG
 would be X times gongsynth's, the published MDI/HMI gongsynth's over X, and
@@ -36,6 +38,8 @@ RUNS = (("fulldisk_cross_calibration.ecsv", "Milne-Eddington Sun, 2014-04-01"),
         ("fulldisk_cross_calibration_3d.ecsv", "3-D Sun, 2014-04-01"),
         ("fulldisk_cross_calibration_3d_cr2254.ecsv", "3-D Sun, 2022-03-10 (CR 2254)"),
         ("fulldisk_cross_calibration_3d_kolmogorov.ecsv", "3-D Sun, 2014-04-01, Kolmogorov seeing"))
+#: Latitudes (deg) at which the shipped conversion table (10″ cells of a sunspot box) is set beside them.
+TABLE_LATITUDES = (0.0, 45.0)
 
 
 def published_ratios():
@@ -62,6 +66,22 @@ def modelled_ratios(path):
             "mdi/gong": slope("gong", "mdi")}
 
 
+def table_ratios(latitudes):
+    """(latitude, ratios) of the shipped conversion table (10″ cells of the default Sun) at each latitude."""
+    import numpy as np
+
+    from gongsynth.analysis.cross_calibration_table import conversion_factors, read_cross_calibration_table
+
+    table = read_cross_calibration_table()
+    factors = {}
+    for source, target in (("gong", "hmi"), ("hmi", "mdi"), ("gong", "mdi")):
+        latitude, factor, _ = conversion_factors(table, source, target)
+        factors[source, target] = dict(zip(np.round(latitude.value, 6), factor))
+    names = {"hmi/gong": ("gong", "hmi"), "mdi/hmi": ("hmi", "mdi"), "mdi/gong": ("gong", "mdi")}
+    return [(latitude, {ratio: factors[pair][latitude] for ratio, pair in names.items()})
+            for latitude in latitudes]
+
+
 def comparison_table(guide=GUIDE):
     """
     An astropy Table: the published ratios, then each run's and the shared factor X from each ratio.
@@ -74,9 +94,11 @@ def comparison_table(guide=GUIDE):
     published = published_ratios()
     rows = [("Liu et al. 2025 (published)", published["hmi/gong"], published["mdi/hmi"],
              published["mdi/gong"], float("nan"), float("nan"))]
-    for name, label in RUNS:
-        model = modelled_ratios(guide / name)
-        rows.append((f"gongsynth: {label}", model["hmi/gong"], model["mdi/hmi"], model["mdi/gong"],
+    models = [(f"gongsynth: {label}", modelled_ratios(guide / name)) for name, label in RUNS]
+    models += [(f"gongsynth: conversion table, 10″ cells, {latitude:.0f}°", ratios)
+               for latitude, ratios in table_ratios(TABLE_LATITUDES)]
+    for label, model in models:
+        rows.append((label, model["hmi/gong"], model["mdi/hmi"], model["mdi/gong"],
                      published["hmi/gong"] / model["hmi/gong"], model["mdi/hmi"] / published["mdi/hmi"]))
     table = Table(rows=rows, names=("run", "hmi_over_gong", "mdi_over_hmi", "mdi_over_gong",
                                     "x_from_hmi_gong", "x_from_mdi_hmi"))
