@@ -41,15 +41,13 @@ def disk_field(smap):
     """
     (field with the disk's median out and 0 elsewhere, quiet on-disk mask, r / R☉, Mm per pixel).
 
-    Quiet: the mean |B − median| over `~gongsynth.analysis.network_clusters.QUIET_WINDOW` below
-    `~gongsynth.analysis.network_clusters.QUIET_BELOW`, as the cluster census takes it (active regions
-    and plage left out).
+    Quiet: `~gongsynth.analysis.network_clusters.quiet_mask`, as the cluster census takes it (active
+    regions and plage left out).
     """
     import astropy.units as u
     import sunpy.map
-    from scipy import ndimage
 
-    from gongsynth.analysis.network_clusters import QUIET_BELOW, QUIET_WINDOW
+    from gongsynth.analysis.network_clusters import quiet_mask
     from gongsynth.analysis.power_spectrum import km_per_arcsec
 
     data = np.array(smap.data, dtype=float)
@@ -57,10 +55,7 @@ def disk_field(smap):
     radius = (np.hypot(hpc.Tx, hpc.Ty) / smap.rsun_obs).to_value(u.one)
     good = np.isfinite(data) & (radius < 0.97)
     field = np.where(good, data - np.median(data[good]), 0.0)
-    box = max(1, int(round((QUIET_WINDOW / smap.scale.axis1).to_value(u.pix))))
-    covered = np.maximum(ndimage.uniform_filter(good * 1.0, box), 1e-3)
-    mean_abs = ndimage.uniform_filter(np.abs(field), box) / covered
-    good &= mean_abs < QUIET_BELOW.to_value(u.G)
+    good &= quiet_mask(field, smap.scale.axis1 * u.pix)
     mm_per_pixel = km_per_arcsec(smap).to_value(u.Mm / u.arcsec) * smap.scale.axis1.to_value(u.arcsec / u.pix)
     return field, good, radius, mm_per_pixel
 

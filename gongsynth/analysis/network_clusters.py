@@ -39,7 +39,8 @@ from sunpy.sun.constants import radius as solar_radius
 from gongsynth.analysis.disk import check_map, disk_coordinates, local_pixel_scale, map_values
 from gongsynth.validation import check_quantity
 
-__all__ = ["NetworkClusters", "network_clusters", "QUIET_WINDOW", "QUIET_BELOW", "INDEX_FLUX", "SHAPE_PIXELS"]
+__all__ = ["NetworkClusters", "network_clusters", "quiet_mask", "QUIET_WINDOW", "QUIET_BELOW", "INDEX_FLUX",
+           "SHAPE_PIXELS"]
 
 #: Side of the box over which the mean |B| decides whether a pixel is quiet (about 2 supergranules).
 QUIET_WINDOW = 60 * u.arcsec
@@ -180,9 +181,6 @@ def network_clusters(smap, *, threshold=20 * u.G, max_radius=0.35, quiet_below=Q
         raise ValueError(f"threshold must be a positive scalar field, got {threshold}")
     if not 0 < float(max_radius) < 1:
         raise ValueError(f"max_radius must be in (0, 1) solar radii, got {max_radius!r}")
-    window = check_quantity(quiet_window, u.arcsec, "quiet_window").to_value(u.arcsec)
-    if np.ndim(window) or not window > 0:
-        raise ValueError(f"quiet_window must be a positive angle, got {quiet_window}")
     rho, mu = disk_coordinates(smap)
     field = map_values(smap)
     region = np.isfinite(field) & (rho < float(max_radius))
@@ -191,11 +189,7 @@ def network_clusters(smap, *, threshold=20 * u.G, max_radius=0.35, quiet_below=Q
     field = field - np.median(field[region])
     scale = local_pixel_scale(smap).to_value(u.arcsec)
     if quiet_below is not None:
-        below = check_quantity(quiet_below, u.G, "quiet_below").to_value(u.G)
-        if np.ndim(below) or not below > 0:
-            raise ValueError(f"quiet_below must be a positive scalar field or None, got {quiet_below}")
-        side = max(1, int(round(window / scale)))
-        region &= ndimage.uniform_filter(np.nan_to_num(np.abs(field)), side, mode="nearest") < below
+        region &= quiet_mask(field, scale * u.arcsec, quiet_below=quiet_below, quiet_window=quiet_window)
     # Area on the sphere of each pixel: its area on the sky at the Sun's distance, over μ.
     km_per_arcsec = solar_radius.to_value(u.km) / smap.rsun_obs.to_value(u.arcsec)
     sphere_area = np.where(region, (scale * km_per_arcsec * 1e5) ** 2 / np.where(region, mu, 1.0), 0.0)
@@ -225,7 +219,46 @@ def network_clusters(smap, *, threshold=20 * u.G, max_radius=0.35, quiet_below=Q
                     "elongation": stacked["elongation"][order]})
     return NetworkClusters(table=table, region_area=sphere_area.sum() / 1e16 * u.Mm**2,
                            threshold=level * u.G, max_radius=float(max_radius),
-                           quiet_below=None if quiet_below is None else below * u.G)
+                           quiet_below=None if quiet_below is None else u.Quantity(quiet_below, u.G))
+
+
+def quiet_mask(field, pixel_scale, *, quiet_below=QUIET_BELOW, quiet_window=QUIET_WINDOW):
+    """
+    The quiet pixels of a magnetogram: mean |B| over a box below a level (active regions and plage out).
+
+    Parameters
+    ----------
+    field : `numpy.ndarray`
+        B_LOS in G with its median taken out (NaN counts as 0).
+    pixel_scale : `~astropy.units.Quantity`
+        The side of a pixel (arcsec).
+    quiet_below : `~astropy.units.Quantity`
+        A pixel is quiet where the mean :math:`|B|` over the box is below this (`QUIET_BELOW`).
+    quiet_window : `~astropy.units.Quantity`
+        Side of the box (`QUIET_WINDOW`).
+
+    Returns
+    -------
+    `numpy.ndarray`
+        Bool, the shape of ``field``.
+
+    Examples
+    --------
+    >>> import numpy as np, astropy.units as u
+    >>> field = np.zeros((60, 60)); field[:, 40:] = 50.0      # a plage strip
+    >>> quiet = quiet_mask(field, 2.5 * u.arcsec)
+    >>> bool(quiet[:, :20].all()), bool(quiet[:, 45:].any())
+    (True, False)
+    """
+    below = check_quantity(quiet_below, u.G, "quiet_below").to_value(u.G)
+    if np.ndim(below) or not below > 0:
+        raise ValueError(f"quiet_below must be a positive scalar field or None, got {quiet_below}")
+    window = check_quantity(quiet_window, u.arcsec, "quiet_window").to_value(u.arcsec)
+    if np.ndim(window) or not window > 0:
+        raise ValueError(f"quiet_window must be a positive angle, got {quiet_window}")
+    scale = check_quantity(pixel_scale, u.arcsec, "pixel_scale").to_value(u.arcsec)
+    side = max(1, int(round(window / scale)))
+    return ndimage.uniform_filter(np.nan_to_num(np.abs(field)), side, mode="nearest") < below
 
 
 def _elongation(labels, index, weight, rows, cols):
