@@ -145,3 +145,16 @@ def test_bad_arguments_named(kwargs, match):
 def test_not_a_map():
     with pytest.raises(TypeError, match="smap"):
         network_clusters(np.zeros((10, 10)))
+
+
+def test_quiet_mask_leaves_out_a_plage_strip_and_its_box_around_it():
+    from gongsynth.analysis.network_clusters import quiet_mask
+
+    field = np.zeros((80, 80))
+    field[:, 50:] = 40.0                        # plage: mean |B| 40 G, above the 15 G rule
+    quiet = quiet_mask(field, 2.5 * u.arcsec)   # a 60″ box is 24 pixels
+    assert quiet[:, :30].all() and not quiet[:, 52:].any()
+    # A box half on the strip averages 20 G: still not quiet; one pixel off the box's reach is.
+    assert not quiet[:, 49].any() and quiet[:, 37].all()
+    with pytest.raises(u.UnitsError, match="pixel_scale"):
+        quiet_mask(field, 2.5 * u.G)
