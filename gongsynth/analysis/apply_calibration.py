@@ -244,7 +244,9 @@ def calibrate(smap, *, table=None, force=False, to="truth", instrument=None, sce
         An instrument's name (``"hmi"``, ``"mdi"``, ``"gong"``): the map on
         that instrument's scale, measured × the predicted factor at each
         pixel's θ (any ordered pair of the conversion table's instruments:
-        the shipped one has GONG, HMI and MDI).
+        the shipped one has GONG, HMI and MDI).  The factors are predicted
+        from physics, not fitted: the shipped GONG→HMI one is below the
+        published whole-disk factor (see the Cross-calibration guide).
     instrument : str, optional
         The map's instrument (``"gong"``, ``"hmi"``, ``"mdi"``); default read
         from its header (`map_instrument`).  With ``to`` another instrument it
