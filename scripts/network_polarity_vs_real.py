@@ -45,14 +45,13 @@ def disk_field(smap):
     regions and plage left out).
     """
     import astropy.units as u
-    import sunpy.map
 
+    from gongsynth.analysis.disk import disk_coordinates
     from gongsynth.analysis.network_clusters import quiet_mask
     from gongsynth.analysis.power_spectrum import km_per_arcsec
 
     data = np.array(smap.data, dtype=float)
-    hpc = sunpy.map.all_coordinates_from_map(smap)
-    radius = (np.hypot(hpc.Tx, hpc.Ty) / smap.rsun_obs).to_value(u.one)
+    radius = disk_coordinates(smap)[0]
     good = np.isfinite(data) & (radius < 0.97)
     field = np.where(good, data - np.median(data[good]), 0.0)
     good &= quiet_mask(field, smap.scale.axis1 * u.pix)

@@ -28,6 +28,7 @@ ECSV, which the gallery draws)::
 Reads the tables in ``docs/guide``; takes a second.
 """
 import argparse
+import math
 from pathlib import Path
 
 GUIDE = Path(__file__).resolve().parents[1] / "docs" / "guide"
@@ -110,7 +111,7 @@ def comparison_table(guide=GUIDE):
 def summary(table):
     """``comparison_table``'s rows as an RST simple table (three decimals, blank for NaN)."""
     header = ("run", "HMI/GONG", "MDI/HMI", "MDI/GONG", "X from HMI/GONG", "X from MDI/HMI")
-    lines = [header] + [(row["run"],) + tuple("" if value != value else f"{value:.3f}"
+    lines = [header] + [(row["run"],) + tuple("" if math.isnan(value) else f"{value:.3f}"
                                                for value in list(row)[1:]) for row in table]
     widths = [max(len(line[i]) for line in lines) for i in range(len(header))]
     rule = "  ".join("=" * w for w in widths)
