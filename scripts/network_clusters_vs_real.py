@@ -37,20 +37,24 @@ REAL_MAPS = {
 }
 
 
-def simulated(instrument, seed, cache, chain_length=None):
+def simulated(instrument, seed, cache, chain_length=None, doppler=False):
     """
     The run of ``instrument``'s real map: its magnetogram and truth ⊗ PSF (run and saved first if missing).
 
-    ``chain_length`` (a length) sets the run's ``network_chain_length`` (default: the configuration's).
+    ``chain_length`` (a length) sets the run's ``network_chain_length`` (default: the configuration's);
+    ``doppler`` adds the run's Dopplergram (a cache without it is run again: the same seed, the same
+    maps).
 
-    Also used by ``scripts/limb_signal_vs_real.py`` and ``scripts/power_spectrum_seeds.py`` (the same
-    runs, the same cache).
+    Also used by ``scripts/limb_signal_vs_real.py``, ``scripts/power_spectrum_seeds.py`` and
+    ``scripts/limb_anisotropy.py`` (the same runs, the same cache).
     """
     import astropy.units as u
     import sunpy.map
 
     paths = {"magnetogram": Path(cache) / f"{instrument}_seed{seed}.fits",
              "truth_psf": Path(cache) / f"{instrument}_seed{seed}_truth_psf.fits"}
+    if doppler:
+        paths["doppler"] = Path(cache) / f"{instrument}_seed{seed}_doppler.fits"
     if not all(p.exists() for p in paths.values()):
         import gongsynth
         from gongsynth.config import Effects, SimulationConfig
@@ -101,8 +105,8 @@ def runs_parser(doc, seeds=(1, 2)):
     """
     The command line of a script that measures these runs: ``--cache``, ``--seeds`` and ``--table``.
 
-    Also used by ``scripts/limb_signal_vs_real.py``, ``scripts/limb_signal_scales.py`` and
-    ``scripts/power_spectrum_seeds.py``.
+    Also used by ``scripts/limb_signal_vs_real.py``, ``scripts/limb_signal_scales.py``,
+    ``scripts/power_spectrum_seeds.py`` and ``scripts/limb_anisotropy.py``.
     """
     parser = argparse.ArgumentParser(description=doc.splitlines()[1])
     parser.add_argument("--cache", type=Path, default=Path("network_clusters_runs"),

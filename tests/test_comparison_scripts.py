@@ -100,3 +100,57 @@ def test_the_large_scale_balance_of_white_noise_falls_as_the_smoothing_area():
     # White noise of 5 G smoothed by a Gaussian of sigma s pixels: 5 / (2 sqrt(pi) s).
     expected = [5.0 / (2 * np.sqrt(np.pi) * s) for s in (4.0, 8.0)]
     assert rms == pytest.approx(expected, rel=0.1)
+
+
+def _disk_map(data, obstime="2009-09-05T18:54"):
+    """A full-disk helioprojective map of ``data`` at 2.5″ pixels, centred on the disk; NaN off it."""
+    import astropy.units as u
+    import sunpy.map
+    from astropy.coordinates import SkyCoord
+    from sunpy.coordinates import frames
+
+    centre = SkyCoord(0 * u.arcsec, 0 * u.arcsec, frame=frames.Helioprojective, observer="earth",
+                      obstime=obstime)
+    header = sunpy.map.make_fitswcs_header(data.shape, centre, scale=[2.5, 2.5] * u.arcsec / u.pix,
+                                           unit=u.G)
+    smap = sunpy.map.Map(data, header)
+    radius = smap.rsun_obs.to_value(u.arcsec) / 2.5
+    yy, xx = np.indices(data.shape)
+    rho = np.hypot(xx - (data.shape[1] - 1) / 2, yy - (data.shape[0] - 1) / 2) / radius
+    return sunpy.map.Map(np.where(rho < 1, data, np.nan), header), rho, radius
+
+
+@pytest.mark.parametrize("exponent, excess", [(1.0, 0.0), (2.0, 1.0)])
+def test_the_limb_fit_reads_back_a_known_fall_and_east_west_excess(exponent, excess):
+    anisotropy = _script("limb_anisotropy")
+    n = 820
+    rng = np.random.default_rng(5)
+    smap, rho, radius = _disk_map(np.zeros((n, n)))
+    yy, xx = np.indices((n, n))
+    x, y = (xx - (n - 1) / 2) / radius, (yy - (n - 1) / 2) / radius
+    mu = np.sqrt(np.clip(1 - rho**2, 1e-6, None))
+    # White noise whose power goes as mu^exponent exp(excess (x^2 - y^2)); 2 G at most, far below the clip.
+    sigma = 2.0 * np.sqrt(mu**exponent * np.exp(excess * (x**2 - y**2 - 1)))
+    noisy, _, _ = _disk_map(rng.normal(0.0, 1.0, (n, n)) * sigma)
+    b, b_error, c, c_error, boxes = anisotropy.limb_fit(noisy)
+    assert boxes > 60 and b_error < 0.3 and c_error < 0.2      # the fit can tell these cases apart
+    assert abs(b - exponent) < 4 * b_error and abs(c - excess) < 4 * c_error
+    # A box of strong field (an active region) is left out of the fit.
+    strong = np.array(noisy.data)
+    strong[n // 2 - 20:n // 2 + 20, n // 2 - 20:n // 2 + 20] = 100.0
+    assert anisotropy.limb_fit(_disk_map(strong)[0])[4] < boxes
+
+
+def test_an_offset_between_the_states_turns_a_doppler_gradient_into_a_field():
+    import astropy.units as u
+
+    from gongsynth import GONGInstrument
+
+    anisotropy = _script("limb_anisotropy")
+    n = 64
+    magnetogram, _, _ = _disk_map(np.full((n, n), 5.0))
+    doppler, _, _ = _disk_map(100.0 * np.arange(n)[None, :] * np.ones((n, 1)))    # 100 m/s per pixel
+    shifted = anisotropy.with_state_offset(magnetogram, doppler, 0.1)
+    per_velocity = GONGInstrument().gauss_per_velocity.to_value(u.G / (u.m / u.s))
+    # B = (G per m/s) x (v+ - v-) / 2 with v+ - v- = 0.1 pixel x 100 m/s per pixel.
+    assert np.allclose(shifted.data[1:-1, 1:-1], 5.0 + per_velocity * 0.1 * 100.0 / 2)

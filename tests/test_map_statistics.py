@@ -61,6 +61,30 @@ def test_spectrum_of_a_box_off_centre_sees_only_that_box():
         quadrant_power_spectrum(_map(np.zeros((400, 400))))          # 1000″ cannot hold 2 x 640″
 
 
+def test_spectrum_by_direction_splits_a_wave_by_its_axis_and_white_noise_evenly():
+    n = 256
+    m = _map(np.zeros((n, n)))
+    dx = (2.5 * u.arcsec * km_per_arcsec(m)).to_value(u.Mm)
+    x = np.arange(n) * dx
+    along_x = _map(10 * np.cos(2 * np.pi * x / (n * dx / 12))[None, :] * np.ones((n, 1)))
+    peak_x = power_spectrum(along_x, direction="x")
+    peak_y = power_spectrum(along_x, direction="y")
+    both = power_spectrum(along_x)
+    # Every one of the cosine's modes lies on the kx axis: "x" holds its power, "y" only the window's leak.
+    assert np.nanmax(peak_x.power.value) > 1e3 * np.nanmax(peak_y.power.value)
+    assert np.all(peak_x.modes + peak_y.modes <= both.modes)
+    # White noise: the two halves agree within their scatter.  Of an annulus's modes about a quarter
+    # are independent (k and -k are one for a real map, and the Hann window ties each mode to its
+    # neighbours), each an exponential variate: the ratio of two means strays by sqrt(2 / (modes / 4)).
+    noise = _map(np.random.default_rng(11).normal(0, 3, (n, n)))
+    sx, sy = power_spectrum(noise, direction="x"), power_spectrum(noise, direction="y")
+    many = (sx.modes >= 400) & (sy.modes >= 400)
+    ratio = sx.power.value[many] / sy.power.value[many]
+    assert np.all(np.abs(ratio - 1) < 4 * np.sqrt(8 / sx.modes[many]))
+    with pytest.raises(ValueError, match="direction"):
+        power_spectrum(noise, direction="z")
+
+
 def test_spectrum_of_white_noise_is_flat_at_sigma_squared_dx_squared():
     n = 256
     noise = _map(np.random.default_rng(7).normal(0, 3, (n, n)))

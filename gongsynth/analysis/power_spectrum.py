@@ -149,7 +149,7 @@ def _box_origin(smap, side, offset):
     return first(cx), first(cy), n
 
 
-def power_spectrum(smap, *, box=640 * u.arcsec, bins=16, edges=None, offset=None):
+def power_spectrum(smap, *, box=640 * u.arcsec, bins=16, edges=None, offset=None, direction=None):
     """
     Azimuthally averaged spatial power spectrum of the central ``box`` of a map (or of one off centre).
 
@@ -176,6 +176,13 @@ def power_spectrum(smap, *, box=640 * u.arcsec, bins=16, edges=None, offset=None
         the pixels and is cut to what the map holds.  Distances stay those at
         disk centre: a box off centre is foreshortened toward the limb, the
         same way on any two maps compared.
+    direction : {None, "x", "y"}
+        Average only the wavevectors nearer one axis of the map: ``"x"`` those
+        with :math:`|k_x| > |k_y|` (patterns that vary along the map's x axis,
+        east-west on a solar-north-up map), ``"y"`` those with :math:`|k_y| >
+        |k_x|`; default both and the diagonals.  Their ratio measures the
+        spectrum's anisotropy, e.g. the foreshortening of a surface pattern
+        near the limb.
 
     Returns
     -------
@@ -206,6 +213,8 @@ def power_spectrum(smap, *, box=640 * u.arcsec, bins=16, edges=None, offset=None
         raise ValueError(f"box must be a positive angle, got {box}")
     if isinstance(bins, bool) or not isinstance(bins, (int, np.integer)) or bins < 2:
         raise ValueError(f"bins must be an int >= 2, got {bins!r}")
+    if direction not in (None, "x", "y"):
+        raise ValueError(f"direction must be None, 'x' or 'y', got {direction!r}")
     data = map_values(smap)
     unit = smap.unit if smap.unit is not None else u.one
     ny, nx = data.shape
@@ -226,7 +235,10 @@ def power_spectrum(smap, *, box=640 * u.arcsec, bins=16, edges=None, offset=None
     dx = scale * km_per_arcsec(smap).to_value(u.km / u.arcsec) / 1e3   # Mm
     f = np.fft.fft2(cut * window)
     density = np.abs(f) ** 2 * dx ** 2 / np.sum(window ** 2)   # Parseval: Σ density Δk² = var
-    k = np.hypot(*np.meshgrid(np.fft.fftfreq(n, d=dx), np.fft.fftfreq(n, d=dx)))
+    kx, ky = np.meshgrid(np.fft.fftfreq(n, d=dx), np.fft.fftfreq(n, d=dx))
+    k = np.hypot(kx, ky)
+    if direction is not None:      # the other axis's modes (and the diagonals) fall outside every annulus
+        k = np.where(np.abs(kx) > np.abs(ky) if direction == "x" else np.abs(ky) > np.abs(kx), k, -1.0)
     if edges is None:
         edges = np.geomspace(1.0 / (n * dx), 0.5 / dx, bins + 1)
     else:

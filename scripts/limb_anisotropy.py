@@ -1,0 +1,212 @@
+"""
+Where the real GONG map's weak field exceeds the model's: its fall to the limb and east-west anisotropy.
+
+The noise guide found that the weak, network-scale signal of the real Big Bear
+map holds up toward the limb.  gongsynth's falls there as a radial field's,
+and so does the real MDI map's.  This script maps that signal over the whole
+disk.  Each map is taken at GONG's pixels (MDI's degraded) and clipped to
+±15 G about its median (the weak field).  The disk within 0.97 R☉ is cut
+into 160″ boxes on a grid.  Boxes with more than 2 % of their pixels beyond
+50 G (active regions) are left out.  The band power P of each box at
+20-50 Mm (`gongsynth.analysis.power_spectrum.power_spectrum`) is fitted as
+
+    ln P = a + b ln μ + c (x² − y²),
+
+with x and y the box centre's east-west and north-south offsets from disk
+centre, in solar radii, and μ its cosine of the heliocentric angle.  b says
+how fast the weak field's power falls toward the limb; c is its excess
+east-west over north-south at equal μ, 0 for anything isotropic on the Sun.
+
+The script also measures each spectrum's anisotropy at 3.7-7 and 7-15 Mm.
+This is the power of the wavevectors nearer the x axis over that of those
+nearer the y axis (``power_spectrum``'s ``direction``).  It is taken in the
+boxes at 0.7 and 0.85 R☉, on the east-west axis and on the north-south axis.
+Foreshortening alone gives the limb's radial direction the excess: x on the
+east-west axis, y on the north-south one.
+
+Then, as an ablation (not in gongsynth), it adds to the simulated GONG maps
+the signal of a fixed offset δ along x between the images of the two
+polarisation states.  GONG lists the two states' images not matching in
+space among its magnetograms' problems, and "stretches" them to match
+(*Status of GONG+ magnetograms*, MUG meeting presentation).  The offset turns
+the Doppler shift's gradient into a field: v⁺ − v⁻ = δ ∂v/∂x, and
+B = ``gauss_per_velocity`` × (v⁺ − v⁻) / 2 as GONG's reduction has it.  The
+Doppler shift is each run's own Dopplergram, and δ is 0.05 and 0.1 pixel.
+Each row also holds the issue-25 statistics against the real map
+(`gongsynth.analysis.map_statistics.compare_statistics`)::
+
+    python scripts/limb_anisotropy.py --cache runs --table docs/guide/limb_anisotropy.ecsv
+
+About 5 minutes on two cores once the runs are cached; a GONG run without its
+Dopplergram in the cache is run again (about 20 s each).  The runs are those
+of ``scripts/network_clusters_vs_real.py`` (its ``simulated``, the same cache).
+"""
+import sys
+import warnings
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from network_clusters_vs_real import REAL_MAPS, runs_parser, simulated  # noqa: E402  (the same runs)
+
+#: Side of the grid's boxes (arcsec), the weak field's clip (G), the band fitted (Mm).
+BOX_ARCSEC, CLIP_G, BAND_MM = 160.0, 15.0, (20.0, 50.0)
+#: A box is left out if more than this fraction of its pixels lie beyond STRONG_G (G).
+STRONG_FRACTION, STRONG_G = 0.02, 50.0
+#: Outermost extent of a box on the disk (solar radii).
+DISK_EDGE = 0.97
+#: Bands of the anisotropy (Mm) and where its boxes sit (solar radii).
+ANISOTROPY_BANDS_MM, ANISOTROPY_RADII = ((3.7, 7.0), (7.0, 15.0)), (0.7, 0.85)
+#: The ablation's offsets between the two states' images (pixels).
+OFFSETS_PX = (0.05, 0.1)
+
+
+def box_centres(radius):
+    """Centres (arcsec, x then y) of the grid's boxes that lie within DISK_EDGE of a disk of ``radius``."""
+    import numpy as np
+
+    steps = np.arange(-radius, radius + 1, BOX_ARCSEC)
+    return np.array([(x, y) for x in steps for y in steps
+                     if np.hypot(x, y) / radius + 0.75 * BOX_ARCSEC / radius <= DISK_EDGE])
+
+
+def weak_field(smap):
+    """The map less its median, clipped to ±CLIP_G, and the map of its strong pixels."""
+    import numpy as np
+    import sunpy.map
+
+    data = np.asarray(smap.data, dtype=float) - np.nanmedian(smap.data)
+    return (sunpy.map.Map(np.clip(data, -CLIP_G, CLIP_G), smap.meta),
+            np.abs(np.nan_to_num(data)) > STRONG_G)
+
+
+def strong_fraction(smap, strong, centre):
+    """Fraction of strong pixels in the box at ``centre`` (arcsec)."""
+    import astropy.units as u
+    from astropy.coordinates import SkyCoord
+
+    x, y = smap.wcs.world_to_pixel(SkyCoord(*centre * u.arcsec, frame=smap.coordinate_frame))
+    half = int(BOX_ARCSEC / 2 / smap.scale[0].to_value(u.arcsec / u.pix))
+    return float(strong[int(y) - half:int(y) + half, int(x) - half:int(x) + half].mean())
+
+
+def limb_fit(smap):
+    """(b, its standard error, c, its standard error, boxes used) of the fit in the module notes."""
+    import astropy.units as u
+    import numpy as np
+
+    from gongsynth.analysis.power_spectrum import power_spectrum
+
+    weak, strong = weak_field(smap)
+    radius = smap.rsun_obs.to_value(u.arcsec)
+    centres = [c for c in box_centres(radius) if strong_fraction(smap, strong, c) <= STRONG_FRACTION]
+    power = [power_spectrum(weak, box=BOX_ARCSEC * u.arcsec, bins=10, offset=c * u.arcsec)
+             .band_power(BAND_MM[0] * u.Mm, BAND_MM[1] * u.Mm).to_value(u.G ** 2 * u.Mm ** 2)
+             for c in centres]
+    x, y = np.transpose(centres) / radius
+    design = np.column_stack([np.ones_like(x), np.log(np.sqrt(1 - x**2 - y**2)), x**2 - y**2])
+    coefficients, *_ = np.linalg.lstsq(design, np.log(power), rcond=None)
+    residual = np.log(power) - design @ coefficients
+    covariance = np.linalg.inv(design.T @ design) * residual.var(ddof=design.shape[1])
+    errors = np.sqrt(np.diag(covariance))
+    return coefficients[1], errors[1], coefficients[2], errors[2], len(centres)
+
+
+def anisotropy(smap):
+    """Mean x/y power ratio in each ANISOTROPY_BANDS_MM band: on the east-west axis, then the north-south."""
+    import astropy.units as u
+    import numpy as np
+
+    from gongsynth.analysis.power_spectrum import power_spectrum
+
+    weak, _ = weak_field(smap)
+    radius = smap.rsun_obs.to_value(u.arcsec)
+    ratios = {}
+    for axis, unit_vectors in (("ew", [(-1, 0), (1, 0)]), ("ns", [(0, 1), (0, -1)])):
+        per_box = []
+        for r in ANISOTROPY_RADII:
+            for ex, ey in unit_vectors:
+                offset = [ex * r * radius, ey * r * radius] * u.arcsec
+                along = {d: power_spectrum(weak, box=BOX_ARCSEC * u.arcsec, bins=10, offset=offset,
+                                           direction=d) for d in ("x", "y")}
+                per_box.append([float(along["x"].band_power(lo * u.Mm, hi * u.Mm)
+                                      / along["y"].band_power(lo * u.Mm, hi * u.Mm))
+                                for lo, hi in ANISOTROPY_BANDS_MM])
+        ratios[axis] = np.mean(per_box, axis=0)
+    return ratios
+
+
+def with_state_offset(magnetogram, doppler, offset_px):
+    """The magnetogram plus the signal of an offset of ``offset_px`` along x between the states' images."""
+    import astropy.units as u
+    import numpy as np
+    import sunpy.map
+
+    from gongsynth import GONGInstrument
+
+    gradient = np.nan_to_num(np.gradient(np.asarray(doppler.data, dtype=float), axis=1))   # m/s per pixel
+    per_velocity = GONGInstrument().gauss_per_velocity.to_value(u.G / (u.m / u.s))
+    return sunpy.map.Map(magnetogram.data + per_velocity * offset_px * gradient / 2, magnetogram.meta)
+
+
+def bars(smap, real):
+    """KS distance (as measured, medians removed), mean |B| and the two noises, simulated/real."""
+    import astropy.units as u
+
+    from gongsynth.analysis.map_statistics import compare_statistics
+
+    table = compare_statistics(smap, real).table
+    ratio = {k: float(u.Quantity(table[k][0] / table[k][1]))
+             for k in ("mean_abs", "noise_box", "noise_difference")}
+    return [float(table["ks"][0]), float(table["ks_centred"][0]), ratio["mean_abs"], ratio["noise_box"],
+            ratio["noise_difference"]]
+
+
+def main(argv=None):
+    """Measure the real and simulated maps and the ablation, write the table, print it."""
+    parser = runs_parser(__doc__, seeds=(1, 2, 3, 4))
+    args = parser.parse_args(argv)
+
+    import astropy.units as u
+    import numpy as np
+    from astropy.table import QTable
+
+    import gongsynth
+    from gongsynth.analysis.degrade import degrade_if_finer
+
+    warnings.simplefilter("ignore", category=UserWarning)
+    real_gong = gongsynth.load_observation(REAL_MAPS["gong"][1])
+    rows = []
+
+    def measure(instrument, kind, seed, offset_px, smap):
+        smap = degrade_if_finer(smap)[0]
+        ratios = anisotropy(smap)
+        statistics = bars(smap, real_gong) if instrument == "gong" else [np.nan] * 5
+        rows.append((instrument, REAL_MAPS[instrument][0], kind, seed, offset_px, *limb_fit(smap),
+                     *ratios["ew"], *ratios["ns"], *statistics))
+        print(" ".join(f"{v:.3f}" if isinstance(v, float) else str(v) for v in rows[-1]), flush=True)
+
+    for instrument in ("gong", "mdi"):
+        measure(instrument, "real", -1, 0.0, gongsynth.load_observation(REAL_MAPS[instrument][1]))
+        for seed in args.seeds:
+            runs = simulated(instrument, seed, args.cache, doppler=instrument == "gong")
+            measure(instrument, "simulated", seed, 0.0, runs["magnetogram"])
+            if instrument == "gong":
+                for offset_px in OFFSETS_PX:
+                    measure(instrument, "simulated+offset", seed, offset_px,
+                            with_state_offset(runs["magnetogram"], runs["doppler"], offset_px))
+    bands = [f"{lo:g}_{hi:g}_Mm".replace(".", "p") for lo, hi in ANISOTROPY_BANDS_MM]
+    names = (["instrument", "date", "kind", "seed", "offset_px", "mu_exponent", "mu_exponent_error",
+              "east_west_excess", "east_west_excess_error", "boxes"]
+             + [f"xy_ratio_ew_{b}" for b in bands] + [f"xy_ratio_ns_{b}" for b in bands]
+             + ["ks", "ks_centred", "mean_abs_ratio", "noise_box_ratio", "noise_difference_ratio"])
+    table = QTable(rows=rows, names=names)
+    table["offset_px"].unit = u.pix
+    table.meta["description"] = __doc__.splitlines()[1]
+    table.meta["gongsynth_version"] = gongsynth.__version__
+    args.table.parent.mkdir(parents=True, exist_ok=True)
+    table.write(args.table, overwrite=True)
+    print(f"wrote {args.table}")
+
+
+if __name__ == "__main__":
+    main()
