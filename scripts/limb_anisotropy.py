@@ -33,7 +33,10 @@ the Doppler shift's gradient into a field: v⁺ − v⁻ = δ ∂v/∂x, and
 B = ``gauss_per_velocity`` × (v⁺ − v⁻) / 2 as GONG's reduction has it.  The
 Doppler shift is each run's own Dopplergram, and δ is 0.05 and 0.1 pixel.
 Each row also holds the issue-25 statistics against the real map
-(`gongsynth.analysis.map_statistics.compare_statistics`)::
+(`gongsynth.analysis.map_statistics.compare_statistics`) and, for the runs,
+the offset that `gongsynth.analysis.state_offset.state_offset` reads back
+from the map and the run's Dopplergram (the real map's Dopplergram is not in
+``shared/data``)::
 
     python scripts/limb_anisotropy.py --cache runs --table docs/guide/limb_anisotropy.ecsv
 
@@ -172,35 +175,42 @@ def main(argv=None):
 
     import gongsynth
     from gongsynth.analysis.degrade import degrade_if_finer
+    from gongsynth.analysis.state_offset import state_offset
 
     warnings.simplefilter("ignore", category=UserWarning)
     real_gong = gongsynth.load_observation(REAL_MAPS["gong"][1])
     rows = []
 
-    def measure(instrument, kind, seed, offset_px, smap):
+    def measure(instrument, kind, seed, offset_px, smap, doppler=None):
         smap = degrade_if_finer(smap)[0]
         ratios = anisotropy(smap)
         statistics = bars(smap, real_gong) if instrument == "gong" else [np.nan] * 5
+        read_back = [np.nan, np.nan]
+        if doppler is not None:
+            row = state_offset(smap, doppler)[0]
+            read_back = [row["offset_x"].to_value(u.pix), row["offset_x_error"].to_value(u.pix)]
         rows.append((instrument, REAL_MAPS[instrument][0], kind, seed, offset_px, *limb_fit(smap),
-                     *ratios["ew"], *ratios["ns"], *statistics))
+                     *ratios["ew"], *ratios["ns"], *statistics, *read_back))
         print(" ".join(f"{v:.3f}" if isinstance(v, float) else str(v) for v in rows[-1]), flush=True)
 
     for instrument in ("gong", "mdi"):
         measure(instrument, "real", -1, 0.0, gongsynth.load_observation(REAL_MAPS[instrument][1]))
         for seed in args.seeds:
             runs = simulated(instrument, seed, args.cache, doppler=instrument == "gong")
-            measure(instrument, "simulated", seed, 0.0, runs["magnetogram"])
+            measure(instrument, "simulated", seed, 0.0, runs["magnetogram"], runs.get("doppler"))
             if instrument == "gong":
                 for offset_px in OFFSETS_PX:
-                    measure(instrument, "simulated+offset", seed, offset_px,
-                            with_state_offset(runs["magnetogram"], runs["doppler"], offset_px))
+                    shifted = with_state_offset(runs["magnetogram"], runs["doppler"], offset_px)
+                    measure(instrument, "simulated+offset", seed, offset_px, shifted, runs["doppler"])
     bands = [f"{lo:g}_{hi:g}_Mm".replace(".", "p") for lo, hi in ANISOTROPY_BANDS_MM]
     names = (["instrument", "date", "kind", "seed", "offset_px", "mu_exponent", "mu_exponent_error",
               "east_west_excess", "east_west_excess_error", "boxes"]
              + [f"xy_ratio_ew_{b}" for b in bands] + [f"xy_ratio_ns_{b}" for b in bands]
-             + ["ks", "ks_centred", "mean_abs_ratio", "noise_box_ratio", "noise_difference_ratio"])
+             + ["ks", "ks_centred", "mean_abs_ratio", "noise_box_ratio", "noise_difference_ratio",
+                "read_offset_x", "read_offset_x_error"])
     table = QTable(rows=rows, names=names)
-    table["offset_px"].unit = u.pix
+    for name in ("offset_px", "read_offset_x", "read_offset_x_error"):
+        table[name].unit = u.pix
     table.meta["description"] = __doc__.splitlines()[1]
     table.meta["gongsynth_version"] = gongsynth.__version__
     args.table.parent.mkdir(parents=True, exist_ok=True)
