@@ -137,8 +137,9 @@ def state_offset(magnetogram, doppler, gauss_per_velocity=None, *, highpass=10.0
     velocity_hp = _highpass(velocity, inside, highpass)
     grad_y, grad_x = np.gradient(velocity_hp)
     # The gradient's central differences reach one pixel out: keep pixels whose neighbours are inside.
-    interior = inside & np.roll(inside, 1, 0) & np.roll(inside, -1, 0) & np.roll(inside, 1, 1) \
-        & np.roll(inside, -1, 1)
+    interior = np.zeros_like(inside)
+    interior[1:-1, 1:-1] = (inside[1:-1, 1:-1] & inside[:-2, 1:-1] & inside[2:, 1:-1]
+                            & inside[1:-1, :-2] & inside[1:-1, 2:])
     used = interior & (np.abs(field_hp) < weak_g)
     if used.sum() < 1000:
         raise ValueError(f"state_offset: only {int(used.sum())} pixels to fit; need at least 1000")
