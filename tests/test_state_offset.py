@@ -52,6 +52,11 @@ def test_a_dopplergram_in_km_per_s_reads_the_same_and_strong_field_is_left_out()
     field, velocity = _maps((0.1, 0.0), seed=3)
     in_km = _map(velocity.data / 1e3, u.km / u.s)
     assert state_offset(field, in_km)[0]["offset_x"] == state_offset(field, velocity)[0]["offset_x"]
+    in_kilogauss = _map(field.data / 1e3, u.kG)
+    assert state_offset(in_kilogauss, velocity)[0]["offset_x"].to_value(u.pix) == pytest.approx(
+        state_offset(field, velocity)[0]["offset_x"].to_value(u.pix), rel=1e-9)
+    with pytest.raises(ValueError, match="doppler"):
+        state_offset(field, _map(velocity.data, u.G))
     spot = np.array(field.data)
     spot[140:160, 140:160] = 1500.0
     fitted = state_offset(_map(spot, u.G), velocity)[0]

@@ -48,6 +48,16 @@ def _highpass(values, inside, sigma):
     return np.where(inside, values - mean, 0.0)
 
 
+def _in_unit(values, unit, wanted, name):
+    """``values`` of a map in ``unit`` converted to ``wanted`` (a map without a unit is taken as in it)."""
+    if unit is None or unit == u.one:
+        return values
+    try:
+        return (values * unit).to_value(wanted)
+    except u.UnitConversionError as exc:
+        raise ValueError(f"{name} must be in units of {wanted}, got {unit}") from exc
+
+
 def _fit(gradients, field):
     """Least-squares coefficients of ``field`` on the columns of ``gradients``."""
     return np.linalg.lstsq(gradients, field, rcond=None)[0]
@@ -61,9 +71,10 @@ def state_offset(magnetogram, doppler, gauss_per_velocity=None, *, highpass=10.0
     Parameters
     ----------
     magnetogram : `~sunpy.map.GenericMap`
-        Line-of-sight field (G).
+        Line-of-sight field (any unit of magnetic flux density; G if it has none).
     doppler : `~sunpy.map.GenericMap`
-        The same observation's Doppler shift (m/s), on the same pixels.
+        The same observation's Doppler shift on the same pixels (any unit of
+        speed; m/s if it has none).
     gauss_per_velocity : `~astropy.units.Quantity`, optional
         :math:`g_v` in G / (m/s) (default: GONG's,
         `gongsynth.GONGInstrument.gauss_per_velocity`).
@@ -127,10 +138,8 @@ def state_offset(magnetogram, doppler, gauss_per_velocity=None, *, highpass=10.0
         raise ValueError(f"blocks must be an int >= 2, got {blocks!r}")
     weak_g = check_quantity(weak, u.G, "weak").to_value(u.G)
 
-    field = map_values(magnetogram)
-    velocity = map_values(doppler)
-    if doppler.unit is not None and doppler.unit != u.one:
-        velocity = (velocity * doppler.unit).to_value(u.m / u.s)
+    field = _in_unit(map_values(magnetogram), magnetogram.unit, u.G, "magnetogram")
+    velocity = _in_unit(map_values(doppler), doppler.unit, u.m / u.s, "doppler")
     rho, _ = disk_coordinates(magnetogram)
     inside = np.isfinite(field) & np.isfinite(velocity) & (np.nan_to_num(rho, nan=np.inf) < max_radius)
     field_hp = _highpass(field, inside, highpass)
