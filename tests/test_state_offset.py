@@ -21,12 +21,19 @@ def _map(data, unit):
     return sunpy.map.Map(data, header)
 
 
-def _maps(offset, seed):
-    """A flow field (m/s), and 3-G noise plus the field an offset between the states makes of it."""
+def _maps(offset, seed, stretch_xx=0.0):
+    """
+    A flow field (m/s), and 3-G noise plus the field an offset between the states makes of it.
+
+    The x offset grows by ``stretch_xx`` pixels per solar radius from disk centre.
+    """
     rng = np.random.default_rng(seed)
     velocity = 4000.0 * gaussian_filter(rng.normal(size=(N, N)), 3.0)        # ~230 m/s rms
     grad_y, grad_x = np.gradient(velocity)
-    field = rng.normal(0.0, 3.0, (N, N)) + 0.5 * G_V * (offset[0] * grad_x + offset[1] * grad_y)
+    radius = _map(velocity, u.m / u.s).rsun_obs.to_value(u.arcsec)
+    x_sun = (np.arange(N) - (N - 1) / 2)[None, :] * 7.0 / radius
+    offset_x = offset[0] + stretch_xx * x_sun
+    field = rng.normal(0.0, 3.0, (N, N)) + 0.5 * G_V * (offset_x * grad_x + offset[1] * grad_y)
     return _map(field, u.G), _map(velocity, u.m / u.s)
 
 
@@ -38,6 +45,21 @@ def test_a_known_offset_is_read_back_within_its_jackknife_error(offset):
         assert 0 < error < 0.01                  # ~40 000 pixels of 3-G noise: a few thousandths of a pixel
         assert abs(value - true) < 4 * error
     assert row["offset_x_arcsec"].to_value(u.arcsec) == pytest.approx(7 * row["offset_x"].to_value(u.pix))
+
+
+def test_a_stretch_is_told_from_a_shift():
+    field, velocity = _maps((0.0, 0.0), seed=5, stretch_xx=0.2)
+    row = state_offset(field, velocity, stretch=True)[0]
+    fitted = {"offset_x": 0.0, "offset_y": 0.0, "stretch_xx": 0.2, "stretch_xy": 0.0, "stretch_yx": 0.0,
+              "stretch_yy": 0.0}
+    for name, true in fitted.items():
+        value, error = row[name].value, row[f"{name}_error"].value
+        assert 0 < error < 0.02 and abs(value - true) < 4 * error, name
+    assert row["stretch_xx"].unit == u.pix / u.R_sun
+    # Fitted as one shift, a stretch symmetric about disk centre reads none.
+    shift = state_offset(field, velocity)[0]
+    assert abs(shift["offset_x"].value) < 4 * shift["offset_x_error"].value
+    assert "stretch_xx" not in shift.colnames
 
 
 def test_the_jackknife_error_matches_the_scatter_over_seeds():
