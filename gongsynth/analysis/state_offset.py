@@ -15,17 +15,17 @@ If the two states' images do not lie on the same pixels, but are offset by
 GONG alternates the two states every second and lists their images not
 matching in space among its magnetograms' problems (*Status of GONG+
 magnetograms*, MUG meeting presentation); the real Big Bear map of
-2009-09-05 carries an east-west fingerprint that an offset of about a tenth of
-a pixel would leave (noise guide, ``scripts/limb_anisotropy.py``).
+2009-09-05 carries an east-west fingerprint, part of which an offset of about
+0.05 pixel would leave (noise guide, ``scripts/limb_anisotropy.py``).
 
 `state_offset` measures :math:`\boldsymbol\delta` from a magnetogram and the
 Dopplergram of the same observation: the least-squares fit of the first to
 the second's gradient, both high-passed alike (which takes out the solar
 rotation's uniform gradient and the magnetogram's zero-point surface), over
-the weak-field pixels of the disk.  The Sun's own correlations between field and flow (the
-network in the supergranules' downflows) change sign from one limb to the
-other and between the polarities, where a fixed offset's does not, so they
-average out over the disk.  Its errors are a block jackknife over a grid of
+the weak-field pixels of the disk.  The Sun's own correlations between field
+and flow (the network in the supergranules' downflows) change sign from one
+limb to the other and between the polarities, where a fixed offset's does
+not, so they average out over the disk.  Its errors are a block jackknife over a grid of
 the disk, since neither map's residual is white.  With ``stretch`` it also
 fits an offset that grows across the image (two images at slightly different
 scales): a shift reads the same everywhere, a stretch zero at disk centre
