@@ -140,15 +140,11 @@ def anisotropy(smap):
 
 def with_state_offset(magnetogram, doppler, offset_px):
     """The magnetogram plus the signal of an offset of ``offset_px`` along x between the states' images."""
-    import astropy.units as u
-    import numpy as np
     import sunpy.map
 
-    from gongsynth import GONGInstrument
+    from gongsynth.analysis.state_offset import offset_field
 
-    gradient = np.nan_to_num(np.gradient(np.asarray(doppler.data, dtype=float), axis=1))   # m/s per pixel
-    per_velocity = GONGInstrument().gauss_per_velocity.to_value(u.G / (u.m / u.s))
-    return sunpy.map.Map(magnetogram.data + per_velocity * offset_px * gradient / 2, magnetogram.meta)
+    return sunpy.map.Map(magnetogram.data + offset_field(doppler, offset_px).data, magnetogram.meta)
 
 
 def bars(smap, real):

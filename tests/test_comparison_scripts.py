@@ -102,8 +102,8 @@ def test_the_large_scale_balance_of_white_noise_falls_as_the_smoothing_area():
     assert rms == pytest.approx(expected, rel=0.1)
 
 
-def _disk_map(data, obstime="2009-09-05T18:54"):
-    """A full-disk helioprojective map of ``data`` at 2.5″ pixels, centred on the disk; NaN off it."""
+def _disk_map(data, obstime="2009-09-05T18:54", unit="G"):
+    """A full-disk map of ``data`` (in ``unit``) at 2.5″ pixels, centred on the disk; NaN off it."""
     import astropy.units as u
     import sunpy.map
     from astropy.coordinates import SkyCoord
@@ -112,7 +112,7 @@ def _disk_map(data, obstime="2009-09-05T18:54"):
     centre = SkyCoord(0 * u.arcsec, 0 * u.arcsec, frame=frames.Helioprojective, observer="earth",
                       obstime=obstime)
     header = sunpy.map.make_fitswcs_header(data.shape, centre, scale=[2.5, 2.5] * u.arcsec / u.pix,
-                                           unit=u.G)
+                                           unit=u.Unit(unit))
     smap = sunpy.map.Map(data, header)
     radius = smap.rsun_obs.to_value(u.arcsec) / 2.5
     yy, xx = np.indices(data.shape)
@@ -149,7 +149,8 @@ def test_an_offset_between_the_states_turns_a_doppler_gradient_into_a_field():
     anisotropy = _script("limb_anisotropy")
     n = 64
     magnetogram, _, _ = _disk_map(np.full((n, n), 5.0))
-    doppler, _, _ = _disk_map(100.0 * np.arange(n)[None, :] * np.ones((n, 1)))    # 100 m/s per pixel
+    ramp = 100.0 * np.arange(n)[None, :] * np.ones((n, 1))                # 100 m/s per pixel
+    doppler, _, _ = _disk_map(ramp, unit="m/s")
     shifted = anisotropy.with_state_offset(magnetogram, doppler, 0.1)
     per_velocity = GONGInstrument().gauss_per_velocity.to_value(u.G / (u.m / u.s))
     # B = (G per m/s) x (v+ - v-) / 2 with v+ - v- = 0.1 pixel x 100 m/s per pixel.

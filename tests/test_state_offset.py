@@ -8,7 +8,7 @@ from scipy.ndimage import gaussian_filter
 from sunpy.coordinates import frames
 
 from gongsynth import GONGInstrument
-from gongsynth.analysis.state_offset import state_offset
+from gongsynth.analysis.state_offset import offset_field, state_offset
 
 N = 300
 G_V = GONGInstrument().gauss_per_velocity.to_value(u.G / (u.m / u.s))
@@ -100,3 +100,13 @@ def test_bad_input_is_refused_naming_the_argument():
         state_offset(field, velocity, weak=50)
     with pytest.raises((TypeError, u.UnitsError), match="gauss_per_velocity"):
         state_offset(field, velocity, gauss_per_velocity=0.7 * u.G)
+
+
+def test_the_forward_model_is_half_g_v_times_the_offset_along_the_gradient():
+    ramp = _map(50.0 * np.arange(N)[:, None] * np.ones((1, N)), u.km / u.s)     # 50 km/s per pixel along y
+    field = offset_field(ramp, 0.3, -0.2)
+    assert field.unit == u.G
+    # Along y only: 0.5 x g_v x (-0.2 pixel) x 50 000 m/s per pixel; nothing from the x offset.
+    assert np.allclose(field.data[1:-1, 1:-1], 0.5 * G_V * -0.2 * 5e4)
+    with pytest.raises(ValueError, match="offset_y"):
+        offset_field(ramp, 0.1, np.nan)

@@ -39,7 +39,7 @@ from scipy.ndimage import gaussian_filter
 from gongsynth.analysis.disk import check_map, map_values, pixel_to_helioprojective
 from gongsynth.validation import check_quantity
 
-__all__ = ["state_offset"]
+__all__ = ["state_offset", "offset_field"]
 
 # σ (pixels) of the average of |B| that finds the strong field left out of the fit.
 _STRONG_SMOOTHING = 2.0
@@ -62,6 +62,66 @@ def _in_unit(values, unit, wanted, name):
         return (values * unit).to_value(wanted)
     except u.UnitConversionError as exc:
         raise ValueError(f"{name} must be in units of {wanted}, got {unit}") from exc
+
+
+def _per_velocity(gauss_per_velocity):
+    """g_v in G per m/s: the given Quantity, or GONG's."""
+    if gauss_per_velocity is None:
+        from gongsynth.instruments.gong.parameters import GONGInstrument
+
+        gauss_per_velocity = GONGInstrument().gauss_per_velocity
+    return check_quantity(gauss_per_velocity, u.G / (u.m / u.s), "gauss_per_velocity").to_value(
+        u.G / (u.m / u.s))
+
+
+def offset_field(doppler, offset_x, offset_y=0.0, gauss_per_velocity=None):
+    r"""
+    The field an offset δ between the states' images makes of a Dopplergram: g_v δ·∇v / 2.
+
+    The forward model that `state_offset` inverts, for ablations: add it to a
+    magnetogram of the same pixels.
+
+    Parameters
+    ----------
+    doppler : `~sunpy.map.GenericMap`
+        Doppler shift (any unit of speed; m/s if it has none).
+    offset_x, offset_y : float
+        δ along the map's x and y axes (pixels).
+    gauss_per_velocity : `~astropy.units.Quantity`, optional
+        :math:`g_v` in G / (m/s) (default: GONG's).
+
+    Returns
+    -------
+    `~sunpy.map.GenericMap`
+        The field (G) on the Dopplergram's pixels; 0 where its gradient is
+        undefined (off the disk and on the disk's outermost pixels).
+
+    Examples
+    --------
+    >>> import numpy as np, astropy.units as u, sunpy.map
+    >>> from astropy.coordinates import SkyCoord
+    >>> from sunpy.coordinates import frames
+    >>> ref = SkyCoord(0 * u.arcsec, 0 * u.arcsec, frame=frames.Helioprojective,
+    ...                observer="earth", obstime="2020-01-01")
+    >>> header = sunpy.map.make_fitswcs_header((8, 8), ref, scale=[5, 5] * u.arcsec / u.pix,
+    ...                                        unit=u.m / u.s)
+    >>> ramp = sunpy.map.Map(100.0 * np.arange(8)[None, :] * np.ones((8, 1)), header)   # 100 m/s per pixel
+    >>> round(float(offset_field(ramp, 0.1, gauss_per_velocity=0.7 * u.G / (u.m / u.s)).data[4, 4]), 3)
+    3.5
+    """
+    import sunpy.map
+
+    check_map(doppler, "doppler")
+    for name, value in (("offset_x", offset_x), ("offset_y", offset_y)):
+        if isinstance(value, bool) or not np.isfinite(value):
+            raise ValueError(f"{name} must be a finite number of pixels, got {value!r}")
+    g_v = _per_velocity(gauss_per_velocity)
+    velocity = _in_unit(map_values(doppler), doppler.unit, u.m / u.s, "doppler")
+    grad_y, grad_x = np.gradient(velocity)
+    field = np.nan_to_num(0.5 * g_v * (offset_x * grad_x + offset_y * grad_y))
+    meta = doppler.meta.copy()
+    meta["bunit"] = "G"
+    return sunpy.map.Map(field, meta)
 
 
 def _fit(gradients, field):
@@ -140,12 +200,7 @@ def state_offset(magnetogram, doppler, gauss_per_velocity=None, *, highpass=10.0
     if magnetogram.data.shape != doppler.data.shape:
         raise ValueError(f"doppler must have the magnetogram's shape {magnetogram.data.shape}, "
                          f"got {doppler.data.shape}")
-    if gauss_per_velocity is None:
-        from gongsynth.instruments.gong.parameters import GONGInstrument
-
-        gauss_per_velocity = GONGInstrument().gauss_per_velocity
-    g_v = check_quantity(gauss_per_velocity, u.G / (u.m / u.s), "gauss_per_velocity").to_value(
-        u.G / (u.m / u.s))
+    g_v = _per_velocity(gauss_per_velocity)
     if not (np.isfinite(highpass) and highpass > 0):
         raise ValueError(f"highpass must be a positive number of pixels, got {highpass!r}")
     if not 0 < max_radius <= 1:
