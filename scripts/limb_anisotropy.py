@@ -8,7 +8,7 @@ disk.  Each map is taken at GONG's pixels (MDI's degraded) and clipped to
 ±15 G about its median (the weak field).  The disk within 0.97 R☉ is cut
 into 160″ boxes on a grid.  Boxes with more than 2 % of their pixels beyond
 50 G (active regions) are left out.  The band power P of each box at
-20-50 Mm (`gongsynth.analysis.power_spectrum.power_spectrum`) is fitted as
+20-50 Mm is fitted (`gongsynth.analysis.limb_power.limb_power_fit`) as
 
     ln P = a + b ln μ + c (x² − y²),
 
@@ -19,7 +19,7 @@ east-west over north-south at equal μ, 0 for anything isotropic on the Sun.
 
 The script also measures each spectrum's anisotropy at 3.7-7 and 7-15 Mm.
 This is the power of the wavevectors nearer the x axis over that of those
-nearer the y axis (``power_spectrum``'s ``direction``).  It is taken in the
+nearer the y axis (`gongsynth.analysis.limb_power.axis_anisotropy`).  It is taken in the
 boxes at 0.7 and 0.85 R☉, on the east-west axis and on the north-south axis.
 Foreshortening alone gives the limb's radial direction the excess: x on the
 east-west axis, y on the north-south one.
@@ -51,91 +51,27 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from network_clusters_vs_real import REAL_MAPS, runs_parser, simulated  # noqa: E402  (the same runs)
 
-#: Side of the grid's boxes (arcsec), the weak field's clip (G), the band fitted (Mm).
-BOX_ARCSEC, CLIP_G, BAND_MM = 160.0, 15.0, (20.0, 50.0)
-#: A box is left out if more than this fraction of its pixels lie beyond STRONG_G (G).
-STRONG_FRACTION, STRONG_G = 0.02, 50.0
-#: Outermost extent of a box on the disk (solar radii).
-DISK_EDGE = 0.97
-#: Bands of the anisotropy (Mm) and where its boxes sit (solar radii).
-ANISOTROPY_BANDS_MM, ANISOTROPY_RADII = ((3.7, 7.0), (7.0, 15.0)), (0.7, 0.85)
 #: The ablation's offsets between the two states' images (pixels).
 OFFSETS_PX = (0.05, 0.1)
 
 
-def box_centres(radius):
-    """Centres (arcsec, x then y) of the grid's boxes that lie within DISK_EDGE of a disk of ``radius``."""
-    import numpy as np
-
-    steps = np.arange(-radius, radius + 1, BOX_ARCSEC)
-    return np.array([(x, y) for x in steps for y in steps
-                     if np.hypot(x, y) / radius + 0.75 * BOX_ARCSEC / radius <= DISK_EDGE])
-
-
-def weak_field(smap):
-    """The map less its median, clipped to ±CLIP_G, and the map of its strong pixels."""
-    import numpy as np
-    import sunpy.map
-
-    data = np.asarray(smap.data, dtype=float) - np.nanmedian(smap.data)
-    return (sunpy.map.Map(np.clip(data, -CLIP_G, CLIP_G), smap.meta),
-            np.abs(np.nan_to_num(data)) > STRONG_G)
-
-
-def strong_fraction(smap, strong, centre):
-    """Fraction of strong pixels in the box at ``centre`` (arcsec)."""
-    import astropy.units as u
-    from astropy.coordinates import SkyCoord
-
-    x, y = smap.wcs.world_to_pixel(SkyCoord(*centre * u.arcsec, frame=smap.coordinate_frame))
-    half = int(BOX_ARCSEC / 2 / smap.scale[0].to_value(u.arcsec / u.pix))
-    return float(strong[int(y) - half:int(y) + half, int(x) - half:int(x) + half].mean())
-
-
 def limb_fit(smap):
     """(b, its standard error, c, its standard error, boxes used) of the fit in the module notes."""
-    import astropy.units as u
-    import numpy as np
+    from gongsynth.analysis.limb_power import limb_power_fit
 
-    from gongsynth.analysis.power_spectrum import power_spectrum
-
-    weak, strong = weak_field(smap)
-    radius = smap.rsun_obs.to_value(u.arcsec)
-    centres = [c for c in box_centres(radius) if strong_fraction(smap, strong, c) <= STRONG_FRACTION]
-    power = [power_spectrum(weak, box=BOX_ARCSEC * u.arcsec, bins=10, offset=c * u.arcsec)
-             .band_power(BAND_MM[0] * u.Mm, BAND_MM[1] * u.Mm).to_value(u.G ** 2 * u.Mm ** 2)
-             for c in centres]
-    x, y = np.transpose(centres) / radius
-    design = np.column_stack([np.ones_like(x), np.log(np.sqrt(1 - x**2 - y**2)), x**2 - y**2])
-    coefficients, *_ = np.linalg.lstsq(design, np.log(power), rcond=None)
-    residual = np.log(power) - design @ coefficients
-    covariance = np.linalg.inv(design.T @ design) * residual.var(ddof=design.shape[1])
-    errors = np.sqrt(np.diag(covariance))
-    return coefficients[1], errors[1], coefficients[2], errors[2], len(centres)
+    fit = limb_power_fit(smap)
+    return fit.mu_exponent, fit.mu_exponent_error, fit.east_west_excess, fit.east_west_excess_error, fit.boxes
 
 
 def anisotropy(smap):
-    """Mean x/y power ratio in each ANISOTROPY_BANDS_MM band: on the east-west axis, then the north-south."""
-    import astropy.units as u
+    """Mean x/y power ratio in each band, on the east-west axis then the north-south (``axis_anisotropy``)."""
     import numpy as np
 
-    from gongsynth.analysis.power_spectrum import power_spectrum
+    from gongsynth.analysis.limb_power import axis_anisotropy
 
-    weak, _ = weak_field(smap)
-    radius = smap.rsun_obs.to_value(u.arcsec)
-    ratios = {}
-    for axis, unit_vectors in (("ew", [(-1, 0), (1, 0)]), ("ns", [(0, 1), (0, -1)])):
-        per_box = []
-        for r in ANISOTROPY_RADII:
-            for ex, ey in unit_vectors:
-                offset = [ex * r * radius, ey * r * radius] * u.arcsec
-                along = {d: power_spectrum(weak, box=BOX_ARCSEC * u.arcsec, bins=10, offset=offset,
-                                           direction=d) for d in ("x", "y")}
-                per_box.append([float(along["x"].band_power(lo * u.Mm, hi * u.Mm)
-                                      / along["y"].band_power(lo * u.Mm, hi * u.Mm))
-                                for lo, hi in ANISOTROPY_BANDS_MM])
-        ratios[axis] = np.mean(per_box, axis=0)
-    return ratios
+    table = axis_anisotropy(smap)
+    return {key: np.asarray(table["xy_ratio"][table["axis"] == axis])
+            for key, axis in (("ew", "east-west"), ("ns", "north-south"))}
 
 
 def with_state_offset(magnetogram, doppler, offset_px):
@@ -198,7 +134,10 @@ def main(argv=None):
                 for offset_px in OFFSETS_PX:
                     shifted = with_state_offset(runs["magnetogram"], runs["doppler"], offset_px)
                     measure(instrument, "simulated+offset", seed, offset_px, shifted, runs["doppler"])
-    bands = [f"{lo:g}_{hi:g}_Mm".replace(".", "p") for lo, hi in ANISOTROPY_BANDS_MM]
+    from gongsynth.analysis.limb_power import ANISOTROPY_BANDS
+
+    bands = [f"{lo.to_value(u.Mm):g}_{hi.to_value(u.Mm):g}_Mm".replace(".", "p")
+             for lo, hi in ANISOTROPY_BANDS]
     names = (["instrument", "date", "kind", "seed", "offset_px", "mu_exponent", "mu_exponent_error",
               "east_west_excess", "east_west_excess_error", "boxes"]
              + [f"xy_ratio_ew_{b}" for b in bands] + [f"xy_ratio_ns_{b}" for b in bands]

@@ -11,10 +11,13 @@ mean |B| of a noisy map as much as a weak field does), the 99th and 99.9th
 percentiles of |B - median| (`gongsynth.analysis.statistics.tail_percentiles`),
 the mean |B| in rings from disk centre to the limb
 (`~gongsynth.analysis.statistics.ring_means`), the azimuthally averaged
-spatial power spectrum of the central region (`gongsynth.analysis.power_spectrum`)
-and the network's clusters near disk centre: their number and flux per area,
+spatial power spectrum of the central region (`gongsynth.analysis.power_spectrum`),
+the network's clusters near disk centre: their number and flux per area,
 the 99th percentile of their fluxes and the power-law index of the
-distribution (`gongsynth.analysis.network_clusters`, its defaults).
+distribution (`gongsynth.analysis.network_clusters`, its defaults), and how
+the weak field's power at the network's scales falls toward the limb and
+how much stronger it is east-west than north-south
+(`gongsynth.analysis.limb_power`).
 
 A seeded Sun and a real map differ in their noise as well as in their Sun;
 the noise fills the core of the histogram, so a KS distance or a mean |B|
@@ -33,6 +36,7 @@ import sunpy.map
 from astropy.table import QTable
 
 from gongsynth.analysis.disk import check_map, disk_coordinates, map_values
+from gongsynth.analysis.limb_power import limb_power_fit
 from gongsynth.analysis.network_clusters import network_clusters
 from gongsynth.analysis.noise import noise_estimate
 from gongsynth.analysis.power_spectrum import power_spectrum, quadrant_power_spectrum
@@ -45,6 +49,7 @@ __all__ = ["StatisticsComparison", "compare_statistics", "match_noise", "quiet_n
 SPECTRUM_BAND = (5 * u.Mm, 100 * u.Mm)
 
 _ROWS = ("sim", "obs", "sim, noise matched", "obs, noise matched")
+_LIMB_COLUMNS = ("limb_exponent", "limb_exponent_error", "east_west_excess", "east_west_excess_error")
 
 
 def match_noise(sim_map, obs_map, *, seed=0):
@@ -149,7 +154,11 @@ class StatisticsComparison:
         ``cluster_density`` (per Mm²), ``cluster_flux_density`` (G),
         ``cluster_p99`` (Mx), ``cluster_index`` and ``cluster_elongation``
         (the median axis ratio of clusters of at least 6 pixels; all NaN
-        where the map does not reach disk centre).
+        where the map does not reach disk centre); the weak field's power
+        at 20-50 Mm over the disk (`~gongsynth.analysis.limb_power.limb_power_fit`):
+        ``limb_exponent`` (b of P ∝ μ^b), ``east_west_excess`` (c of
+        exp(c (x² − y²))) and their errors ``limb_exponent_error`` and
+        ``east_west_excess_error`` (NaN where the map holds too little of the disk).
     rings : `~astropy.table.QTable`
         ``r_inner``, ``r_outer`` (solar radii), ``pixels_sim``, ``pixels_obs``
         and the mean |B| of each map and condition: ``sim``, ``obs``,
@@ -253,6 +262,12 @@ class StatisticsComparison:
             with np.errstate(invalid="ignore", divide="ignore"):
                 lines.append(f"{name:26s}{v[0]:9.2f}{v[1]:9.2f}{v[0] / v[1]:8.2f}   "
                              f"{v[2]:12.2f}{v[3]:9.2f}{v[2] / v[3]:8.2f}")
+        for key, name in (("limb_exponent", "weak power ∝ μ^b: b"),
+                          ("limb_exponent_error", "  its standard error"),
+                          ("east_west_excess", "east-west excess c"),
+                          ("east_west_excess_error", "  its standard error")):
+            v = np.asarray(t[key], dtype=float)
+            lines.append(f"{name:26s}{v[0]:9.2f}{v[1]:9.2f}{'':8s}   {v[2]:12.2f}{v[3]:9.2f}")
         for r in self.rings:
             lines.append(f"{'mean |B| ' + f'{r['r_inner']:.2f}-{r['r_outer']:.2f} R':26s}"
                          f"{r['sim'].to_value(u.G):9.2f}{r['obs'].to_value(u.G):9.2f}{r['ratio']:8.2f}   "
@@ -306,6 +321,9 @@ class StatisticsComparison:
         """
         Draw the mean |B| in centre-to-limb rings of both maps (dashed: noise matched; dotted: robust width).
 
+        Where the maps hold enough of the disk, the text in the corner gives each map's fit of its weak
+        field's power over the disk (``limb_exponent`` b, ``east_west_excess`` c).
+
         Parameters
         ----------
         ax : `matplotlib.axes.Axes`
@@ -327,6 +345,13 @@ class StatisticsComparison:
         ax.set_ylim(bottom=0)
         ax.set_title("mean |B| and robust σ by centre-to-limb ring", fontsize=8)
         ax.legend(fontsize=6, ncol=2, loc="lower left")
+        fits = [f"{key}: b = {row['limb_exponent']:.2f} ± {row['limb_exponent_error']:.2f}, "
+                f"c = {row['east_west_excess']:+.2f} ± {row['east_west_excess_error']:.2f}"
+                for key, row in zip(("sim", "obs"), self.table[:2]) if np.isfinite(row["limb_exponent"])]
+        if fits:      # the weak field's power at 20-50 Mm ∝ μ^b exp(c (x² − y²)) (limb_power_fit)
+            ax.text(0.98, 0.26, "weak power at 20-50 Mm $\\propto \\mu^b\\,e^{c\\,(x^2 - y^2)}$\n"
+                    + "\n".join(fits), fontsize=6, ha="right", va="bottom", transform=ax.transAxes,
+                    bbox={"facecolor": "white", "edgecolor": "0.8", "alpha": 0.9})
 
 
 def _measure(smap, rho, max_radius, box, ring_edges, edges=None):
@@ -341,11 +366,17 @@ def _measure(smap, rho, max_radius, box, ring_edges, edges=None):
     except ValueError:                       # the map does not reach disk centre
         clusters = {"number_density": np.nan / u.Mm**2, "flux_density": np.nan * u.G,
                     "p99": np.nan * u.Mx, "index": np.nan, "elongation": np.nan}
+    try:
+        limb = limb_power_fit(smap)
+        limb = [limb.mu_exponent, limb.mu_exponent_error, limb.east_west_excess, limb.east_west_excess_error]
+    except ValueError:                       # too little of the disk for the fit
+        limb = [np.nan] * 4
     return dict(
         clusters={"cluster_density": clusters["number_density"].to(u.Mm**-2),
                   "cluster_flux_density": clusters["flux_density"].to(u.G),
                   "cluster_p99": clusters["p99"].to(u.Mx), "cluster_index": float(clusters["index"]),
                   "cluster_elongation": float(clusters["elongation"])},
+        limb=dict(zip(_LIMB_COLUMNS, limb)),
         values=values,
         numbers={"noise_box": noise.sigma.to_value(u.G), "noise_difference": noise.difference.to_value(u.G),
                  "mean": float(np.mean(values)), "median": float(np.median(values)),
@@ -437,6 +468,8 @@ def compare_statistics(sim_map, obs_map, *, seed=0, max_radius=0.98, box=640 * u
     for key in measured[0]["clusters"]:
         values = [m["clusters"][key] for m in measured]
         table[key] = u.Quantity(values) if isinstance(values[0], u.Quantity) else values
+    for key in _LIMB_COLUMNS:
+        table[key] = [m["limb"][key] for m in measured]
 
     names = ("sim", "obs", "sim_matched", "obs_matched")
     r0 = measured[0]["rings"]
