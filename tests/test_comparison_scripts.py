@@ -134,3 +134,37 @@ def test_an_offset_between_the_states_turns_a_doppler_gradient_into_a_field():
     per_velocity = GONGInstrument().gauss_per_velocity.to_value(u.G / (u.m / u.s))
     # B = (G per m/s) x (v+ - v-) / 2 with v+ - v- = 0.1 pixel x 100 m/s per pixel.
     assert np.allclose(shifted.data[1:-1, 1:-1], 5.0 + per_velocity * 0.1 * 100.0 / 2)
+
+
+def test_frozen_flow_tilt_across_the_wind_is_three_halves_of_that_along_it():
+    wind = _script("wind_seeing_anisotropy")
+    # Kolmogorov between the outer scale and the aperture (κ0 = 6e-6, κ∥ = 6, 1/D = 1e4 per m):
+    # Γ(3/2) Γ(1/3) / (√π Γ(4/3)) = 3/2.
+    along, across = wind.tilt_spectra(1.0, 1.0, 1e-4, 1e6)
+    assert across[0] / along[0] == pytest.approx(1.5, rel=0.01)
+    # Far above the aperture's frequency the tilt along the wind is the larger.
+    along, across = wind.tilt_spectra(2000.0, 1.0, 0.01, 20.0)
+    assert across[0] < along[0]
+
+
+def test_a_wind_from_the_suns_azimuth_at_transit_lies_along_celestial_north():
+    import astropy.units as u
+    from astropy.coordinates import AltAz, get_body
+    from astropy.time import Time
+    from sunpy.coordinates.sun import P
+
+    from gongsynth.observing import site_location
+
+    wind = _script("wind_seeing_anisotropy")
+    site = site_location("BB")
+    # Big Bear's local noon of 2009-09-05 (the Sun transits near 19:49 UT): find the transit.
+    times = Time("2009-09-05T19:30") + np.linspace(0, 40, 81) * u.min
+    altitude = get_body("sun", times, site).transform_to(AltAz(obstime=times, location=site)).alt.deg
+    transit = times[int(np.argmax(altitude))]
+    # At transit the Sun is due south; a wind from the south lies in the vertical, which is celestial
+    # north, P east of solar north: 90° - P from the image's +x.
+    angle = wind.projected_wind_angle(transit, site, 180.0)
+    assert angle == pytest.approx((90.0 - P(transit).deg) % 180, abs=1.0)
+    # A wind at right angles to it lies across it on the image.
+    across = wind.projected_wind_angle(transit, site, 90.0)
+    assert abs((across - angle) % 180 - 90) < 1.0
