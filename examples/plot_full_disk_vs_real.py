@@ -148,7 +148,10 @@ for label, smap in (("points", points.magnetogram), ("chains of 3 Mm", quiet.mag
 # limb and the spatial power spectra of the central 640″ (and of the four 640″
 # boxes that tile the central 1280″, dotted: one box's spectrum at network
 # scales strays by a factor ~1.4 from one map of the same Sun to the next, see
-# the noise guide); each also with the
+# the noise guide), and in the rings' panel each map's fit of its weak
+# field's power at 20-50 Mm over the disk, P ∝ μ^b exp[c (x² − y²)]
+# (`~gongsynth.analysis.limb_power.limb_power_fit`: b how fast it falls toward
+# the limb, c how much stronger it is east-west); each also with the
 # two maps' noise matched (white noise added to the quieter one), since a KS
 # distance alone mixes the Sun and the noise.
 
