@@ -32,15 +32,20 @@ space among its magnetograms' problems, and "stretches" them to match
 the Doppler shift's gradient into a field: v⁺ − v⁻ = δ ∂v/∂x, and
 B = ``gauss_per_velocity`` × (v⁺ − v⁻) / 2 as GONG's reduction has it.  The
 Doppler shift is each run's own Dopplergram, and δ is 0.05 and 0.1 pixel.
+A second ablation takes the kind of mismatch GONG corrects, a stretch: an
+offset that grows from disk centre, δ = S (x, y) in pixels per solar radius,
+along x only (S_xx = 0.1 and 0.2, an anamorphic stretch) and on both axes
+(S_xx = S_yy = 0.1 and 0.2, a magnification), with
+`gongsynth.analysis.state_offset.offset_field`'s ``stretch``.
 Each row also holds the issue-25 statistics against the real map
 (`gongsynth.analysis.map_statistics.compare_statistics`) and, for the runs,
 the offset that `gongsynth.analysis.state_offset.state_offset` reads back
-from the map and the run's Dopplergram (the real map's Dopplergram is not in
-``shared/data``)::
+from the map and the run's Dopplergram, as one shift and (``stretch=True``)
+as a stretch (the real map's Dopplergram is not in ``shared/data``)::
 
     python scripts/limb_anisotropy.py --cache runs --table docs/guide/limb_anisotropy.ecsv
 
-About 5 minutes on two cores once the runs are cached; a GONG run without its
+About 7 minutes on two cores once the runs are cached; a GONG run without its
 Dopplergram in the cache is run again (about 20 s each).  The runs are those
 of ``scripts/network_clusters_vs_real.py`` (its ``simulated``, the same cache).
 """
@@ -53,6 +58,8 @@ from network_clusters_vs_real import REAL_MAPS, runs_parser, simulated  # noqa: 
 
 #: The ablation's offsets between the two states' images (pixels).
 OFFSETS_PX = (0.05, 0.1)
+#: The ablation's stretches (S_xx, S_yy), pixels per solar radius: along x only, then a magnification.
+STRETCHES = ((0.1, 0.0), (0.2, 0.0), (0.1, 0.1), (0.2, 0.2))
 
 
 def limb_fit(smap):
@@ -74,13 +81,19 @@ def anisotropy(smap):
             for key, axis in (("ew", "east-west"), ("ns", "north-south"))}
 
 
-def with_state_offset(magnetogram, doppler, offset_px):
-    """The magnetogram plus the signal of an offset of ``offset_px`` along x between the states' images."""
+def with_state_offset(magnetogram, doppler, offset_px, stretch=(0.0, 0.0)):
+    """
+    The magnetogram plus the signal of an offset between the states' images.
+
+    ``offset_px`` along x at disk centre, growing by ``stretch`` = (S_xx, S_yy) pixels per solar radius.
+    """
     import sunpy.map
 
     from gongsynth.analysis.state_offset import offset_field
 
-    return sunpy.map.Map(magnetogram.data + offset_field(doppler, offset_px).data, magnetogram.meta)
+    matrix = [[stretch[0], 0.0], [0.0, stretch[1]]]
+    return sunpy.map.Map(magnetogram.data + offset_field(doppler, offset_px, stretch=matrix).data,
+                         magnetogram.meta)
 
 
 def bars(smap, real):
@@ -113,39 +126,51 @@ def main(argv=None):
     real_gong = gongsynth.load_observation(REAL_MAPS["gong"][1])
     rows = []
 
-    def measure(instrument, kind, seed, offset_px, smap, doppler=None):
+    def measure(instrument, kind, seed, offset_px, stretch, smap, doppler=None):
         smap = degrade_if_finer(smap)[0]
         ratios = anisotropy(smap)
         statistics = bars(smap, real_gong) if instrument == "gong" else [np.nan] * 5
-        read_back = [np.nan, np.nan]
+        read_back = [np.nan] * 6
         if doppler is not None:
-            row = state_offset(smap, doppler)[0]
-            read_back = [row["offset_x"].to_value(u.pix), row["offset_x_error"].to_value(u.pix)]
-        rows.append((instrument, REAL_MAPS[instrument][0], kind, seed, offset_px, *limb_fit(smap),
+            shift = state_offset(smap, doppler)[0]
+            grown = state_offset(smap, doppler, stretch=True)[0]
+            read_back = [shift["offset_x"].to_value(u.pix), shift["offset_x_error"].to_value(u.pix)]
+            read_back += [grown[name].to_value(u.pix / u.R_sun)
+                          for name in ("stretch_xx", "stretch_xx_error", "stretch_yy", "stretch_yy_error")]
+        rows.append((instrument, REAL_MAPS[instrument][0], kind, seed, offset_px, *stretch, *limb_fit(smap),
                      *ratios["ew"], *ratios["ns"], *statistics, *read_back))
         print(" ".join(f"{v:.3f}" if isinstance(v, float) else str(v) for v in rows[-1]), flush=True)
 
     for instrument in ("gong", "mdi"):
-        measure(instrument, "real", -1, 0.0, gongsynth.load_observation(REAL_MAPS[instrument][1]))
+        none = (0.0, 0.0)
+        measure(instrument, "real", -1, 0.0, none, gongsynth.load_observation(REAL_MAPS[instrument][1]))
         for seed in args.seeds:
             runs = simulated(instrument, seed, args.cache, doppler=instrument == "gong")
-            measure(instrument, "simulated", seed, 0.0, runs["magnetogram"], runs.get("doppler"))
+            measure(instrument, "simulated", seed, 0.0, none, runs["magnetogram"], runs.get("doppler"))
             if instrument == "gong":
                 for offset_px in OFFSETS_PX:
                     shifted = with_state_offset(runs["magnetogram"], runs["doppler"], offset_px)
-                    measure(instrument, "simulated+offset", seed, offset_px, shifted, runs["doppler"])
+                    measure(instrument, "simulated+offset", seed, offset_px, none, shifted, runs["doppler"])
+                for stretch in STRETCHES:
+                    stretched = with_state_offset(runs["magnetogram"], runs["doppler"], 0.0, stretch)
+                    measure(instrument, "simulated+stretch", seed, 0.0, stretch, stretched, runs["doppler"])
     from gongsynth.analysis.limb_power import ANISOTROPY_BANDS
 
     bands = [f"{lo.to_value(u.Mm):g}_{hi.to_value(u.Mm):g}_Mm".replace(".", "p")
              for lo, hi in ANISOTROPY_BANDS]
-    names = (["instrument", "date", "kind", "seed", "offset_px", "mu_exponent", "mu_exponent_error",
+    names = (["instrument", "date", "kind", "seed", "offset_px", "stretch_xx", "stretch_yy",
+              "mu_exponent", "mu_exponent_error",
               "east_west_excess", "east_west_excess_error", "boxes"]
              + [f"xy_ratio_ew_{b}" for b in bands] + [f"xy_ratio_ns_{b}" for b in bands]
              + ["ks", "ks_centred", "mean_abs_ratio", "noise_box_ratio", "noise_difference_ratio",
-                "read_offset_x", "read_offset_x_error"])
+                "read_offset_x", "read_offset_x_error", "read_stretch_xx", "read_stretch_xx_error",
+                "read_stretch_yy", "read_stretch_yy_error"])
     table = QTable(rows=rows, names=names)
     for name in ("offset_px", "read_offset_x", "read_offset_x_error"):
         table[name].unit = u.pix
+    for name in ("stretch_xx", "stretch_yy", "read_stretch_xx", "read_stretch_xx_error", "read_stretch_yy",
+                 "read_stretch_yy_error"):
+        table[name].unit = u.pix / u.R_sun
     table.meta["description"] = __doc__.splitlines()[1]
     table.meta["gongsynth_version"] = gongsynth.__version__
     args.table.parent.mkdir(parents=True, exist_ok=True)

@@ -110,3 +110,20 @@ def test_the_forward_model_is_half_g_v_times_the_offset_along_the_gradient():
     assert np.allclose(field.data[1:-1, 1:-1], 0.5 * G_V * -0.2 * 5e4)
     with pytest.raises(ValueError, match="offset_y"):
         offset_field(ramp, 0.1, np.nan)
+
+
+def test_a_stretch_from_the_forward_model_is_read_back_exactly_without_noise():
+    rng = np.random.default_rng(11)
+    velocity = _map(4000.0 * gaussian_filter(rng.normal(size=(N, N)), 3.0), u.m / u.s)
+    stretch = [[0.2, 0.05], [-0.03, 0.1]]
+    field = offset_field(velocity, 0.02, -0.01, stretch=stretch)
+    row = state_offset(field, velocity, stretch=True)[0]
+    assert row["offset_x"].to_value(u.pix) == pytest.approx(0.02, abs=1e-6)
+    assert row["offset_y"].to_value(u.pix) == pytest.approx(-0.01, abs=1e-6)
+    for name, true in zip(("stretch_xx", "stretch_xy", "stretch_yx", "stretch_yy"), np.ravel(stretch)):
+        assert row[name].to_value(u.pix / u.R_sun) == pytest.approx(true, abs=1e-5), name
+    # No stretch is the shift alone; a matrix of the wrong shape is refused by name.
+    assert np.array_equal(offset_field(velocity, 0.02, stretch=np.zeros((2, 2))).data,
+                          offset_field(velocity, 0.02).data)
+    with pytest.raises(ValueError, match="stretch"):
+        offset_field(velocity, 0.0, stretch=[0.1, 0.2])

@@ -74,7 +74,14 @@ def _per_velocity(gauss_per_velocity):
         u.G / (u.m / u.s))
 
 
-def offset_field(doppler, offset_x, offset_y=0.0, gauss_per_velocity=None):
+def _disk_offsets(smap):
+    """Each pixel's helioprojective offsets from disk centre, x and y, in solar radii."""
+    ny, nx = smap.data.shape
+    tx, ty = pixel_to_helioprojective(smap, *np.mgrid[:ny, :nx][::-1])
+    return tuple(np.asarray(t) / smap.rsun_obs.to_value(u.arcsec) for t in (tx, ty))
+
+
+def offset_field(doppler, offset_x, offset_y=0.0, gauss_per_velocity=None, *, stretch=None):
     r"""
     The field an offset δ between the states' images makes of a Dopplergram: g_v δ·∇v / 2.
 
@@ -86,9 +93,15 @@ def offset_field(doppler, offset_x, offset_y=0.0, gauss_per_velocity=None):
     doppler : `~sunpy.map.GenericMap`
         Doppler shift (any unit of speed; m/s if it has none).
     offset_x, offset_y : float
-        δ along the map's x and y axes (pixels).
+        δ along the map's x and y axes (pixels); with ``stretch``, at disk centre.
     gauss_per_velocity : `~astropy.units.Quantity`, optional
         :math:`g_v` in G / (m/s) (default: GONG's).
+    stretch : 2 × 2 array-like of float, optional
+        An offset that grows across the image, as `state_offset` fits it
+        with ``stretch=True``: δ(x, y) = δ₀ + S (x, y), S =
+        ``[[stretch_xx, stretch_xy], [stretch_yx, stretch_yy]]`` in pixels
+        per solar radius, x and y the helioprojective offsets from disk
+        centre in solar radii (default: none).
 
     Returns
     -------
@@ -115,9 +128,18 @@ def offset_field(doppler, offset_x, offset_y=0.0, gauss_per_velocity=None):
     for name, value in (("offset_x", offset_x), ("offset_y", offset_y)):
         if isinstance(value, bool) or not np.isfinite(value):
             raise ValueError(f"{name} must be a finite number of pixels, got {value!r}")
+    if stretch is not None:
+        stretch = np.asarray(stretch, dtype=float)
+        if stretch.shape != (2, 2) or not np.all(np.isfinite(stretch)):
+            raise ValueError("stretch must be a finite 2 × 2 matrix (pixels per solar radius), "
+                             f"got {stretch!r}")
     g_v = _per_velocity(gauss_per_velocity)
     velocity = _in_unit(map_values(doppler), doppler.unit, u.m / u.s, "doppler")
     grad_y, grad_x = np.gradient(velocity)
+    if stretch is not None:
+        x_sun, y_sun = _disk_offsets(doppler)
+        offset_x = offset_x + stretch[0, 0] * x_sun + stretch[0, 1] * y_sun
+        offset_y = offset_y + stretch[1, 0] * x_sun + stretch[1, 1] * y_sun
     field = np.nan_to_num(0.5 * g_v * (offset_x * grad_x + offset_y * grad_y))
     meta = doppler.meta.copy()
     meta["bunit"] = "G"
@@ -211,9 +233,7 @@ def state_offset(magnetogram, doppler, gauss_per_velocity=None, *, highpass=10.0
 
     field = _in_unit(map_values(magnetogram), magnetogram.unit, u.G, "magnetogram")
     velocity = _in_unit(map_values(doppler), doppler.unit, u.m / u.s, "doppler")
-    ny, nx = field.shape
-    tx, ty = pixel_to_helioprojective(magnetogram, *np.mgrid[:ny, :nx][::-1])
-    x_sun, y_sun = (np.asarray(t) / magnetogram.rsun_obs.to_value(u.arcsec) for t in (tx, ty))
+    x_sun, y_sun = _disk_offsets(magnetogram)
     rho = np.hypot(x_sun, y_sun)
     inside = np.isfinite(field) & np.isfinite(velocity) & (np.nan_to_num(rho, nan=np.inf) < max_radius)
     grad_y, grad_x = np.gradient(np.where(inside, velocity, 0.0))
