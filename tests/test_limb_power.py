@@ -73,9 +73,11 @@ def test_the_weak_field_is_clipped_about_the_median():
     weak, is_strong = weak_field(_map(data))
     assert weak.data[0, 0] == 15.0 and weak.data[0, 1] == -15.0 and np.isnan(weak.data[0, 2])
     assert weak.data[5, 5] == 0.0 and is_strong.sum() == 1 and weak.unit == u.G
-    # In kG: the same field.
+    # In kG: the same field.  A Dopplergram is refused.
     kg = sunpy.map.Map(data / 1000, {**_map(data).meta, "bunit": "kG"})
     assert np.allclose(weak_field(kg)[0].data, weak.data, equal_nan=True)
+    with pytest.raises(ValueError, match="magnetogram"):
+        limb_power_fit(sunpy.map.Map(data, {**_map(data).meta, "bunit": "m/s"}))
 
 
 @pytest.mark.parametrize("along, excess_in", [("x", "x"), ("y", "y")])

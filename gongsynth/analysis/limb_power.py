@@ -94,7 +94,7 @@ def weak_field(smap, clip=WEAK_CLIP, strong=STRONG_FIELD):
     Parameters
     ----------
     smap : `~sunpy.map.GenericMap`
-        A magnetogram in G.
+        A magnetogram in G (or another unit of flux density; a map without a unit is taken as in G).
     clip, strong : `~astropy.units.Quantity`
         The clip (15 G) and the field beyond which a pixel is strong (50 G), both about the median.
 
@@ -125,7 +125,9 @@ def weak_field(smap, clip=WEAK_CLIP, strong=STRONG_FIELD):
     clip_g = check_scalar(clip, u.G, "clip")
     strong_g = check_scalar(strong, u.G, "strong")
     data = map_values(smap)
-    if smap.unit is not None and smap.unit.is_equivalent(u.G):
+    if smap.unit is not None and smap.unit != u.one:
+        if not smap.unit.is_equivalent(u.G):
+            raise ValueError(f"smap must be a magnetogram in units of G, got {smap.unit}")
         data = (data * smap.unit).to_value(u.G)
     data = data - np.nanmedian(data)
     with np.errstate(invalid="ignore"):
@@ -173,8 +175,9 @@ def limb_power_fit(smap, *, box=LIMB_BOX, band=LIMB_BAND, clip=WEAK_CLIP, strong
     Raises
     ------
     ValueError
-        If an argument is out of range, or fewer than 7 boxes are left (too
-        little of the disk, or too much strong field).
+        If the map is not a magnetogram, an argument is out of range, or
+        fewer than 7 boxes are left (too little of the disk, or too much
+        strong field).
 
     Examples
     --------
