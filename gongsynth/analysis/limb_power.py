@@ -10,7 +10,8 @@ north-south of disk centre.  `limb_power_fit` measures both on one map:
 - the map, less its median, is clipped to ±``clip`` (15 G): the weak field,
   so that a few network clusters or a spot do not set a box's power;
 - the disk within ``disk_edge`` (0.97 R☉) is cut into ``box`` squares
-  (160″) on a grid through disk centre; a box is left out if more than
+  (160″) on a square grid of that step from the disk's east and south
+  edges (it need not pass through disk centre); a box is left out if more than
   ``strong_fraction`` (2 %) of its pixels lie beyond ``strong`` (50 G), i.e.
   an active region, or if the map does not hold it whole;
 - the power P of each box at ``band`` (20-50 Mm, the network's scales;
