@@ -49,8 +49,8 @@ import numpy as np
 import sunpy.map
 from astropy.table import QTable
 
-from gongsynth.analysis.disk import check_map, helioprojective_to_pixel, local_pixel_scale, map_values
-from gongsynth.analysis.power_spectrum import power_spectrum
+from gongsynth.analysis.disk import check_map, map_values
+from gongsynth.analysis.power_spectrum import box_origin, power_spectrum
 from gongsynth.validation import check_scalar
 
 __all__ = ["LimbPowerFit", "limb_power_fit", "axis_anisotropy", "weak_field", "WEAK_CLIP", "STRONG_FIELD",
@@ -137,12 +137,11 @@ def weak_field(smap, clip=WEAK_CLIP, strong=STRONG_FIELD):
 
 
 def _box_pixels(smap, centre, side):
-    """(x0, y0, n) of the ``side``-arcsec box at helioprojective ``centre`` (arcsec), None if cut."""
-    x, y = helioprojective_to_pixel(smap, centre[0], centre[1])
-    n = int(round(side / local_pixel_scale(smap).to_value(u.arcsec)))
-    if not (np.isfinite(x[0]) and np.isfinite(y[0])):
+    """(x0, y0, n) of `power_spectrum`'s ``side``-arcsec box at ``centre`` (arcsec); None if cut."""
+    try:
+        x0, y0, n = box_origin(smap, side, centre * u.arcsec)
+    except ValueError:                       # not a point of this map
         return None
-    x0, y0 = int(round(float(x[0]) - n / 2)), int(round(float(y[0]) - n / 2))
     ny, nx = smap.data.shape
     return (x0, y0, n) if x0 >= 0 and y0 >= 0 and x0 + n <= nx and y0 + n <= ny else None
 

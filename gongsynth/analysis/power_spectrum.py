@@ -33,7 +33,7 @@ from gongsynth.analysis.disk import (
 )
 from gongsynth.validation import check_quantity
 
-__all__ = ["PowerSpectrum", "power_spectrum", "quadrant_power_spectrum", "km_per_arcsec"]
+__all__ = ["PowerSpectrum", "power_spectrum", "quadrant_power_spectrum", "km_per_arcsec", "box_origin"]
 
 
 @dataclass(frozen=True)
@@ -125,8 +125,29 @@ def km_per_arcsec(smap):
     return near * (1 * u.arcsec).to_value(u.rad) / u.arcsec
 
 
-def _box_origin(smap, side, offset):
-    """First pixel (x0, y0) and side n of the square of ``side`` arcsec at ``offset``, before any cut."""
+def box_origin(smap, side, offset=None):
+    """
+    First pixel and side, in pixels, of the square that `power_spectrum` transforms, before any cut.
+
+    Parameters
+    ----------
+    smap : `~sunpy.map.GenericMap`
+        A helioprojective map.
+    side : float
+        The square's side, arcsec.
+    offset : `~astropy.units.Quantity`, optional
+        Helioprojective (Tx, Ty) of its centre (default: disk centre).
+
+    Returns
+    -------
+    x0, y0, n : int
+        Its first column and row (may lie outside the map) and its side.
+
+    Raises
+    ------
+    ValueError
+        If ``offset`` is not a finite point of this map.
+    """
     cx, cy = disk_centre_pixel(smap)
     if offset is not None:
         shift = np.asarray(check_quantity(offset, u.arcsec, "offset").to_value(u.arcsec), dtype=float)
@@ -219,7 +240,7 @@ def power_spectrum(smap, *, box=640 * u.arcsec, bins=16, edges=None, offset=None
     unit = smap.unit if smap.unit is not None else u.one
     ny, nx = data.shape
     scale = local_pixel_scale(smap).to_value(u.arcsec)
-    x0, y0, n = _box_origin(smap, side, offset)
+    x0, y0, n = box_origin(smap, side, offset)
     x0, y0 = max(x0, 0), max(y0, 0)
     n = min(n, nx - x0, ny - y0)
     if n < 16:
@@ -293,7 +314,7 @@ def quadrant_power_spectrum(smap, *, box=640 * u.arcsec, bins=16, edges=None):
     ny, nx = smap.data.shape
     offsets = [u.Quantity([sx * side / 2, sy * side / 2]) for sx in (-1, 1) for sy in (-1, 1)]
     for offset in offsets:
-        x0, y0, n = _box_origin(smap, side.to_value(u.arcsec), offset)
+        x0, y0, n = box_origin(smap, side.to_value(u.arcsec), offset)
         if min(x0, y0) < 0 or x0 + n > nx or y0 + n > ny:
             raise ValueError(f"quadrant_power_spectrum: the map does not hold the central {2 * side:g}")
     spectra = []
